@@ -1,0 +1,49 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Compiles every core algorithm for every supported dimension, so that a change that breaks one
+// dimension fails the build rather than a later user.
+
+#include "Balance/SpacetreeBalance.h"
+#include "Check/MeshInvariants.h"
+#include "Spacetree/SpacetreeBuild.h"
+#include "Tessellate/SpacetreeTessellation.h"
+
+namespace stm
+{
+template class Spacetree<1>;
+template class Spacetree<2>;
+template class Spacetree<3>;
+template class Spacetree<4>;
+template class LevelMap<1>;
+template class LevelMap<2>;
+template class LevelMap<3>;
+template class LevelMap<4>;
+template class SpacetreeTessellator<1>;
+template class SpacetreeTessellator<2>;
+template class SpacetreeTessellator<3>;
+template class SpacetreeTessellator<4>;
+
+namespace
+{
+template <int Dim>
+void InstantiatePipeline()
+{
+  SequentialExecutor executor;
+  MaterialImage<Dim> image;
+  Spacetree<Dim> tree;
+  SpacetreeBuilder<Dim>().Build(image, { 0 }, SpacetreeBuildOptions(), tree, executor);
+  SpacetreeBalancer<Dim>().Balance(tree, SpacetreeBalanceOptions(), executor);
+  SpacetreeTessellator<Dim> tessellator;
+  tessellator.Prepare(tree, SpacetreeTessellationOptions(), executor);
+  tessellator.WriteSimplices(static_cast<std::int64_t*>(nullptr), nullptr, executor);
+  CheckSimplicialMesh<Dim>({}, {}, nullptr);
+}
+} // namespace
+
+void InstantiateAllDimensions()
+{
+  InstantiatePipeline<1>();
+  InstantiatePipeline<2>();
+  InstantiatePipeline<3>();
+  InstantiatePipeline<4>();
+}
+} // namespace stm

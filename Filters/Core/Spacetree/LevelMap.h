@@ -1,0 +1,217 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#ifndef stmCoreLevelMap_h
+#define stmCoreLevelMap_h
+
+// A dense map from every lattice cell of the root grid to the level and material of the leaf
+// that covers it. It answers "which leaf contains this cell" in O(1), which is what balancing
+// needs, and it turns back into the canonical leaf list. One byte of level and two of material
+// per lattice cell.
+
+#include "../Common/CubeInfo.h"
+#include "../Common/Status.h"
+#include "Spacetree.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace stm
+{
+
+template <int Dim>
+class LevelMap
+{
+public:
+  template <class Executor>
+  Status Build(const Spacetree<Dim>& tree, Executor& executor)
+  {
+    this->MaxLevel = tree.MaxLevel;
+    this->RootGridDimensions = tree.RootGridDimensions;
+    this->Dimensions = tree.GetLatticeDimensions();
+    const std::int64_t cells = NumberOfLatticeCells<Dim>(this->Dimensions);
+    this->Levels.assign(static_cast<std::size_t>(cells), 0);
+    this->Materials.assign(static_cast<std::size_t>(cells), BackgroundMaterial);
+
+    struct FillKernel
+    {
+      using Scratch = NoScratch;
+      LevelMap* Map;
+      const Spacetree<Dim>* Tree;
+      void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+      {
+        for (std::int64_t leaf = begin; leaf < end; ++leaf)
+        {
+          this->Map->Fill(this->Tree->LeafAnchors[leaf], this->Tree->LeafLevels[leaf],
+            this->Tree->LeafMaterials[leaf]);
+        }
+      }
+    } kernel{ this, &tree };
+    executor.For(0, tree.GetNumberOfLeaves(), 4096, kernel);
+    return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
+  }
+
+  const LatticeIndex<Dim>& GetDimensions() const { return this->Dimensions; }
+
+  bool Contains(const LatticeIndex<Dim>& cell) const
+  {
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      if (cell[axis] < 0 || cell[axis] >= this->Dimensions[axis])
+      {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  int LevelAt(const LatticeIndex<Dim>& cell) const
+  {
+    return this->Levels[LinearIndex<Dim>(cell, this->Dimensions)];
+  }
+
+  MaterialIndex MaterialAt(const LatticeIndex<Dim>& cell) const
+  {
+    return this->Materials[LinearIndex<Dim>(cell, this->Dimensions)];
+  }
+
+  std::int64_t CellSize(int level) const { return std::int64_t{ 1 } << (this->MaxLevel - level); }
+
+  /// Anchor of the leaf of the given level that contains the cell.
+  LatticeIndex<Dim> AnchorOf(const LatticeIndex<Dim>& cell, int level) const
+  {
+    const std::int64_t size = this->CellSize(level);
+    LatticeIndex<Dim> anchor;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      anchor[axis] = cell[axis] - cell[axis] % size;
+    }
+    return anchor;
+  }
+
+  /// Marks the region of a leaf as covered by a leaf of this level and material.
+  void Fill(const LatticeIndex<Dim>& anchor, int level, MaterialIndex material)
+  {
+    const std::int64_t size = this->CellSize(level);
+    this->ForEachRow(anchor, size, [&](std::int64_t rowStart) {
+      for (std::int64_t i = 0; i < size; ++i)
+      {
+        this->Levels[rowStart + i] = static_cast<std::uint8_t>(level);
+        this->Materials[rowStart + i] = material;
+      }
+    });
+  }
+
+  /// Splits the leaf (level, anchor) into its 2^Dim children; the children keep its material.
+  void Split(const LatticeIndex<Dim>& anchor, int level)
+  {
+    const std::int64_t size = this->CellSize(level);
+    this->ForEachRow(anchor, size, [&](std::int64_t rowStart) {
+      for (std::int64_t i = 0; i < size; ++i)
+      {
+        this->Levels[rowStart + i] = static_cast<std::uint8_t>(level + 1);
+      }
+    });
+  }
+
+  /// Rebuilds the canonical leaf list of the tree from the map.
+  template <class Executor>
+  Status CollectLeaves(Spacetree<Dim>& tree, Executor& executor) const
+  {
+    const std::int64_t roots = NumberOfLatticeCells<Dim>(this->RootGridDimensions);
+    std::vector<Spacetree<Dim>> perRoot(static_cast<std::size_t>(roots));
+    struct CollectKernel
+    {
+      using Scratch = NoScratch;
+      const LevelMap* Map;
+      std::vector<Spacetree<Dim>>* PerRoot;
+      void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+      {
+        for (std::int64_t root = begin; root < end; ++root)
+        {
+          LatticeIndex<Dim> anchor;
+          std::int64_t rest = root;
+          for (int axis = 0; axis < Dim; ++axis)
+          {
+            anchor[axis] = (rest % this->Map->RootGridDimensions[axis]) * this->Map->CellSize(0);
+            rest /= this->Map->RootGridDimensions[axis];
+          }
+          this->Map->CollectNode(anchor, 0, (*this->PerRoot)[root]);
+        }
+      }
+    } kernel{ this, &perRoot };
+    executor.For(0, roots, 16, kernel);
+    if (executor.ShouldAbort())
+    {
+      return Status::Aborted();
+    }
+    std::int64_t total = 0;
+    for (const auto& part : perRoot)
+    {
+      total += part.GetNumberOfLeaves();
+    }
+    tree.ClearLeaves();
+    tree.ReserveLeaves(total);
+    for (const auto& part : perRoot)
+    {
+      tree.LeafLevels.insert(tree.LeafLevels.end(), part.LeafLevels.begin(), part.LeafLevels.end());
+      tree.LeafAnchors.insert(
+        tree.LeafAnchors.end(), part.LeafAnchors.begin(), part.LeafAnchors.end());
+      tree.LeafMaterials.insert(
+        tree.LeafMaterials.end(), part.LeafMaterials.begin(), part.LeafMaterials.end());
+    }
+    return Status::Ok();
+  }
+
+  std::size_t GetMemorySize() const { return this->Levels.size() * 3; }
+
+private:
+  void CollectNode(const LatticeIndex<Dim>& anchor, int level, Spacetree<Dim>& out) const
+  {
+    if (this->LevelAt(anchor) == level)
+    {
+      out.AddLeaf(level, anchor, this->MaterialAt(anchor));
+      return;
+    }
+    const std::int64_t half = this->CellSize(level + 1);
+    for (int child = 0; child < CubeInfo<Dim>::VerticesPerCell; ++child)
+    {
+      LatticeIndex<Dim> childAnchor = anchor;
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        childAnchor[axis] += ((child >> axis) & 1) * half;
+      }
+      this->CollectNode(childAnchor, level + 1, out);
+    }
+  }
+
+  /// Calls rowStart(linearIndexOfFirstCell) for every axis-0 row of a cube region.
+  template <class RowFunction>
+  void ForEachRow(const LatticeIndex<Dim>& anchor, std::int64_t size, RowFunction&& row) const
+  {
+    std::int64_t rows = 1;
+    for (int axis = 1; axis < Dim; ++axis)
+    {
+      rows *= size;
+    }
+    for (std::int64_t r = 0; r < rows; ++r)
+    {
+      LatticeIndex<Dim> cell = anchor;
+      std::int64_t rest = r;
+      for (int axis = 1; axis < Dim; ++axis)
+      {
+        cell[axis] += rest % size;
+        rest /= size;
+      }
+      row(LinearIndex<Dim>(cell, this->Dimensions));
+    }
+  }
+
+  int MaxLevel = 0;
+  LatticeIndex<Dim> RootGridDimensions{};
+  LatticeIndex<Dim> Dimensions{};
+  std::vector<std::uint8_t> Levels;
+  std::vector<MaterialIndex> Materials;
+};
+
+} // namespace stm
+
+#endif

@@ -1,0 +1,105 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#ifndef stmCoreSpacetreeValidate_h
+#define stmCoreSpacetreeValidate_h
+
+// Validation of a spacetree that comes from outside the core (a file, another program): the
+// algorithms assume its leaves partition the root grid, and would produce a broken mesh
+// otherwise.
+
+#include "../Common/CubeInfo.h"
+#include "../Common/Status.h"
+#include "Spacetree.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace stm
+{
+
+template <int Dim>
+Status ValidateSpacetree(const Spacetree<Dim>& tree)
+{
+  if (tree.MaxLevel < 0 || tree.MaxLevel > 20)
+  {
+    return Status::Invalid("the spacetree's MaxLevel must be between 0 and 20");
+  }
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    if (tree.RootGridDimensions[axis] < 1 || tree.ImageDimensions[axis] < 1)
+    {
+      return Status::Invalid("the spacetree's root grid and image dimensions must be positive");
+    }
+    if (tree.ImageDimensions[axis] > tree.RootGridDimensions[axis] * tree.GetRootCellSize())
+    {
+      return Status::Invalid("the spacetree's root grid does not cover its image");
+    }
+  }
+  if (tree.MaterialLabels.empty() || tree.MaterialLabels.size() > 65536)
+  {
+    return Status::Invalid("the spacetree's material table must have 1 to 65536 entries");
+  }
+  const LatticeIndex<Dim> dims = tree.GetLatticeDimensions();
+  const std::int64_t cells = NumberOfLatticeCells<Dim>(dims);
+  if (cells > (std::int64_t{ 1 } << 40))
+  {
+    return Status::OutOfRange("the spacetree's lattice is too large");
+  }
+  std::vector<std::uint8_t> coverage(static_cast<std::size_t>(cells), 0);
+  for (std::int64_t leaf = 0; leaf < tree.GetNumberOfLeaves(); ++leaf)
+  {
+    const int level = tree.LeafLevels[leaf];
+    if (level > tree.MaxLevel)
+    {
+      return Status::Invalid("leaf " + std::to_string(leaf) + " has a level above MaxLevel");
+    }
+    if (tree.LeafMaterials[leaf] >= tree.MaterialLabels.size())
+    {
+      return Status::Invalid("leaf " + std::to_string(leaf) + " has an unknown material");
+    }
+    const std::int64_t size = tree.GetCellSize(level);
+    const LatticeIndex<Dim>& anchor = tree.LeafAnchors[leaf];
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      if (anchor[axis] < 0 || anchor[axis] % size != 0 || anchor[axis] + size > dims[axis])
+      {
+        return Status::Invalid("leaf " + std::to_string(leaf) + " lies outside the root grid or off its level's lattice");
+      }
+    }
+    std::int64_t rows = 1;
+    for (int axis = 1; axis < Dim; ++axis)
+    {
+      rows *= size;
+    }
+    for (std::int64_t r = 0; r < rows; ++r)
+    {
+      LatticeIndex<Dim> cell = anchor;
+      std::int64_t rest = r;
+      for (int axis = 1; axis < Dim; ++axis)
+      {
+        cell[axis] += rest % size;
+        rest /= size;
+      }
+      std::uint8_t* row = coverage.data() + LinearIndex<Dim>(cell, dims);
+      for (std::int64_t i = 0; i < size; ++i)
+      {
+        if (row[i]++ != 0)
+        {
+          return Status::Invalid("leaf " + std::to_string(leaf) + " overlaps another leaf");
+        }
+      }
+    }
+  }
+  for (std::int64_t c = 0; c < cells; ++c)
+  {
+    if (coverage[c] == 0)
+    {
+      return Status::Invalid("the leaves leave a hole in the root grid");
+    }
+  }
+  return Status::Ok();
+}
+
+} // namespace stm
+
+#endif

@@ -1,0 +1,449 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "stmImageToSpacetree.h"
+
+#include "stmSMPExecutor.h"
+#include "stmSpacetreeData.h"
+
+#include "Spacetree/SpacetreeBuild.h"
+
+#include "vtkArrayDispatch.h"
+#include "vtkDataArrayRange.h"
+#include "vtkDataObject.h"
+#include "vtkDataSetAttributes.h"
+#include "vtkImageData.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkMatrix3x3.h"
+#include "vtkObjectFactory.h"
+#include "vtkSMPTools.h"
+#include "vtkUnstructuredGrid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+vtkStandardNewMacro(stmImageToSpacetree);
+
+namespace
+{
+// Label ranges up to this size get a direct lookup table; wider ones use binary search.
+constexpr long long LookupTableLimit = 1 << 24;
+
+bool IsIntegerType(int type)
+{
+  switch (type)
+  {
+    case VTK_CHAR:
+    case VTK_SIGNED_CHAR:
+    case VTK_UNSIGNED_CHAR:
+    case VTK_SHORT:
+    case VTK_UNSIGNED_SHORT:
+    case VTK_INT:
+    case VTK_UNSIGNED_INT:
+    case VTK_LONG:
+    case VTK_UNSIGNED_LONG:
+    case VTK_LONG_LONG:
+    case VTK_UNSIGNED_LONG_LONG:
+    case VTK_ID_TYPE:
+      return true;
+    default:
+      return false;
+  }
+}
+
+/// Distinct label values of an integer array, sorted; fails for labels outside int32.
+struct CollectLabels
+{
+  std::vector<long long> Labels;
+  bool OutOfRange = false;
+
+  template <typename ArrayT>
+  void operator()(ArrayT* array)
+  {
+    const auto values = vtk::DataArrayValueRange<1>(array);
+    if (values.size() == 0)
+    {
+      return;
+    }
+    long long lo = std::numeric_limits<long long>::max();
+    long long hi = std::numeric_limits<long long>::lowest();
+    for (const auto value : values)
+    {
+      lo = std::min<long long>(lo, static_cast<long long>(value));
+      hi = std::max<long long>(hi, static_cast<long long>(value));
+    }
+    if (lo < std::numeric_limits<int>::min() || hi > std::numeric_limits<int>::max())
+    {
+      this->OutOfRange = true;
+      return;
+    }
+    if (hi - lo < LookupTableLimit)
+    {
+      std::vector<char> present(static_cast<std::size_t>(hi - lo + 1), 0);
+      for (const auto value : values)
+      {
+        present[static_cast<long long>(value) - lo] = 1;
+      }
+      for (long long i = 0; i <= hi - lo; ++i)
+      {
+        if (present[i])
+        {
+          this->Labels.push_back(lo + i);
+        }
+      }
+      return;
+    }
+    this->Labels.assign(values.begin(), values.end());
+    std::sort(this->Labels.begin(), this->Labels.end());
+    this->Labels.erase(std::unique(this->Labels.begin(), this->Labels.end()), this->Labels.end());
+  }
+};
+
+/// Writes the material index of every voxel: position in the sorted body labels + 1, or 0.
+struct MapToMaterials
+{
+  const std::vector<long long>* SortedBody;
+  std::vector<stm::MaterialIndex>* Materials;
+
+  template <typename ArrayT>
+  void operator()(ArrayT* array)
+  {
+    const auto values = vtk::DataArrayValueRange<1>(array);
+    const std::vector<long long>& body = *this->SortedBody;
+    stm::MaterialIndex* out = this->Materials->data();
+    const long long lo = body.front();
+    const long long hi = body.back();
+    if (hi - lo < LookupTableLimit)
+    {
+      std::vector<stm::MaterialIndex> table(static_cast<std::size_t>(hi - lo + 1), 0);
+      for (std::size_t i = 0; i < body.size(); ++i)
+      {
+        table[body[i] - lo] = static_cast<stm::MaterialIndex>(i + 1);
+      }
+      vtkSMPTools::For(0, values.size(), [&](vtkIdType begin, vtkIdType end) {
+        for (vtkIdType v = begin; v < end; ++v)
+        {
+          const long long label = static_cast<long long>(values[v]);
+          out[v] = (label < lo || label > hi) ? stm::BackgroundMaterial : table[label - lo];
+        }
+      });
+      return;
+    }
+    vtkSMPTools::For(0, values.size(), [&](vtkIdType begin, vtkIdType end) {
+      for (vtkIdType v = begin; v < end; ++v)
+      {
+        const long long label = static_cast<long long>(values[v]);
+        const auto it = std::lower_bound(body.begin(), body.end(), label);
+        out[v] = (it != body.end() && *it == label)
+          ? static_cast<stm::MaterialIndex>(it - body.begin() + 1)
+          : stm::BackgroundMaterial;
+      }
+    });
+  }
+};
+
+template <int Dim>
+bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxelDims[3],
+  const stmSpacetreeGeometry& geometry, const std::vector<long long>& materialLabels,
+  int maxCellSize, stmSMPExecutor& executor, vtkUnstructuredGrid* output, std::string& error)
+{
+  stm::MaterialImage<Dim> image;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    image.Dimensions[axis] = voxelDims[geometry.ImageAxes[axis]];
+  }
+  image.Values = materials.data();
+  stm::SpacetreeBuildOptions options;
+  options.MaxCellSize = maxCellSize;
+  stm::Spacetree<Dim> tree;
+  const std::vector<std::int64_t> labels(materialLabels.begin(), materialLabels.end());
+  const stm::Status status =
+    stm::SpacetreeBuilder<Dim>().Build(image, labels, options, tree, executor);
+  if (!status.IsOk())
+  {
+    error = status.GetMessage();
+    return false;
+  }
+  stmSpacetreeData::WriteSpacetree<Dim>(tree, geometry, output);
+  return true;
+}
+} // namespace
+
+stmImageToSpacetree::stmImageToSpacetree()
+{
+  // Default label array: the active scalars, point data first.
+  this->SetInputArrayToProcess(0, 0, 0, vtkDataObject::FIELD_ASSOCIATION_POINTS_THEN_CELLS,
+    vtkDataSetAttributes::SCALARS);
+}
+
+stmImageToSpacetree::~stmImageToSpacetree() = default;
+
+void stmImageToSpacetree::SetNumberOfBodyLabels(int count)
+{
+  count = std::max(0, count);
+  if (static_cast<int>(this->BodyLabels.size()) != count)
+  {
+    this->BodyLabels.resize(static_cast<std::size_t>(count), 0);
+    this->Modified();
+  }
+}
+
+int stmImageToSpacetree::GetNumberOfBodyLabels() const
+{
+  return static_cast<int>(this->BodyLabels.size());
+}
+
+void stmImageToSpacetree::SetBodyLabel(int index, int label)
+{
+  if (index < 0)
+  {
+    vtkErrorMacro("SetBodyLabel: negative index " << index);
+    return;
+  }
+  if (index >= static_cast<int>(this->BodyLabels.size()))
+  {
+    this->BodyLabels.resize(static_cast<std::size_t>(index) + 1, 0);
+  }
+  else if (this->BodyLabels[index] == label)
+  {
+    return;
+  }
+  this->BodyLabels[index] = label;
+  this->Modified();
+}
+
+int stmImageToSpacetree::GetBodyLabel(int index) const
+{
+  return (index >= 0 && index < static_cast<int>(this->BodyLabels.size())) ? this->BodyLabels[index]
+                                                                            : 0;
+}
+
+void stmImageToSpacetree::AddBodyLabel(int label)
+{
+  this->BodyLabels.push_back(label);
+  this->Modified();
+}
+
+void stmImageToSpacetree::RemoveAllBodyLabels()
+{
+  if (!this->BodyLabels.empty())
+  {
+    this->BodyLabels.clear();
+    this->Modified();
+  }
+}
+
+void stmImageToSpacetree::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "BodyLabels:";
+  if (this->BodyLabels.empty())
+  {
+    os << " (every label except BackgroundLabel)";
+  }
+  for (int label : this->BodyLabels)
+  {
+    os << " " << label;
+  }
+  os << "\n";
+  os << indent << "BackgroundLabel: " << this->BackgroundLabel << "\n";
+  os << indent << "MaxCellSize: " << this->MaxCellSize << "\n";
+}
+
+int stmImageToSpacetree::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkImageData");
+  return 1;
+}
+
+int stmImageToSpacetree::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkImageData* input = vtkImageData::GetData(inputVector[0], 0);
+  vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
+  if (!input || !output)
+  {
+    vtkErrorMacro("ImageToSpacetree needs a vtkImageData input.");
+    return 0;
+  }
+
+  // The label array.
+  int association = -1;
+  vtkDataArray* labels = this->GetInputArrayToProcess(0, inputVector, association);
+  if (!labels)
+  {
+    vtkErrorMacro("No label array: select an integer point or cell array of the image.");
+    return 0;
+  }
+  if (labels->GetNumberOfComponents() != 1)
+  {
+    vtkErrorMacro("The label array \"" << (labels->GetName() ? labels->GetName() : "")
+                                       << "\" has " << labels->GetNumberOfComponents()
+                                       << " components; it must have one.");
+    return 0;
+  }
+  const int type = labels->GetDataType();
+  if (!IsIntegerType(type))
+  {
+    vtkErrorMacro("The label array \""
+      << (labels->GetName() ? labels->GetName() : "") << "\" is of type "
+      << labels->GetDataTypeAsString()
+      << "; ImageToSpacetree needs integer labels (threshold a gray-value image first).");
+    return 0;
+  }
+
+  // Voxels per axis: one per point for point data, one per cell for cell data.
+  int pointDims[3];
+  input->GetDimensions(pointDims);
+  const bool cellLabels = association == vtkDataObject::FIELD_ASSOCIATION_CELLS;
+  int voxelDims[3];
+  stmSpacetreeGeometry geometry;
+  geometry.Dimension = 0;
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    voxelDims[axis] = cellLabels ? std::max(1, pointDims[axis] - 1) : pointDims[axis];
+    if (voxelDims[axis] > 1)
+    {
+      geometry.ImageAxes[geometry.Dimension++] = axis;
+    }
+  }
+  if (labels->GetNumberOfTuples() != static_cast<vtkIdType>(voxelDims[0]) * voxelDims[1] * voxelDims[2])
+  {
+    vtkErrorMacro("The label array does not have one value per voxel.");
+    return 0;
+  }
+  if (geometry.Dimension < 2)
+  {
+    vtkErrorMacro("The image has " << voxelDims[0] << " x " << voxelDims[1] << " x "
+                                   << voxelDims[2]
+                                   << " voxels; ImageToSpacetree needs a 2D or 3D image.");
+    return 0;
+  }
+  double spacing[3];
+  input->GetSpacing(spacing);
+  if (!(spacing[0] > 0 && spacing[1] > 0 && spacing[2] > 0) || !std::isfinite(spacing[0]) ||
+    !std::isfinite(spacing[1]) || !std::isfinite(spacing[2]))
+  {
+    vtkErrorMacro("The image spacing (" << spacing[0] << ", " << spacing[1] << ", " << spacing[2]
+                                        << ") must be positive and finite.");
+    return 0;
+  }
+  const double* direction = input->GetDirectionMatrix()->GetData();
+  double origin[3];
+  input->GetOrigin(origin);
+  for (int c = 0; c < 3; ++c)
+  {
+    geometry.Origin[c] = origin[c];
+  }
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      geometry.AxisVectors[axis][c] = direction[3 * c + axis] * spacing[axis];
+    }
+  }
+  if (!cellLabels)
+  {
+    // A point-data voxel is centred on its point: the lattice starts half a voxel before it
+    // along every axis the spacetree spans.
+    for (int i = 0; i < geometry.Dimension; ++i)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        geometry.Origin[c] -= 0.5 * geometry.AxisVectors[geometry.ImageAxes[i]][c];
+      }
+    }
+  }
+  this->UpdateProgress(0.05);
+
+  // The body of interest.
+  CollectLabels collect;
+  if (!vtkArrayDispatch::DispatchByValueType<vtkArrayDispatch::Integrals>::Execute(labels, collect))
+  {
+    collect(labels); // generic fallback through the vtkDataArray API
+  }
+  if (collect.OutOfRange)
+  {
+    vtkErrorMacro("The label array holds values outside the 32-bit integer range.");
+    return 0;
+  }
+  std::vector<long long> body;
+  if (this->BodyLabels.empty())
+  {
+    for (long long label : collect.Labels)
+    {
+      if (label != this->BackgroundLabel)
+      {
+        body.push_back(label);
+      }
+    }
+    if (body.empty())
+    {
+      vtkErrorMacro("The body of interest is empty: the image holds no label other than the "
+                    "background label "
+        << this->BackgroundLabel << ".");
+      return 0;
+    }
+  }
+  else
+  {
+    body.assign(this->BodyLabels.begin(), this->BodyLabels.end());
+    std::sort(body.begin(), body.end());
+    body.erase(std::unique(body.begin(), body.end()), body.end());
+    for (long long label : body)
+    {
+      if (label == this->BackgroundLabel)
+      {
+        vtkErrorMacro("Body label " << label
+                                    << " equals the background label; choose another "
+                                       "BackgroundLabel.");
+        return 0;
+      }
+      if (!std::binary_search(collect.Labels.begin(), collect.Labels.end(), label))
+      {
+        vtkErrorMacro("Body label " << label << " does not occur in the label array \""
+                                    << (labels->GetName() ? labels->GetName() : "") << "\".");
+        return 0;
+      }
+    }
+  }
+  if (body.size() > 65535)
+  {
+    vtkErrorMacro("The body of interest has " << body.size() << " labels; at most 65535 are supported.");
+    return 0;
+  }
+  std::vector<stm::MaterialIndex> materials(static_cast<std::size_t>(labels->GetNumberOfTuples()));
+  MapToMaterials map{ &body, &materials };
+  if (!vtkArrayDispatch::DispatchByValueType<vtkArrayDispatch::Integrals>::Execute(labels, map))
+  {
+    map(labels);
+  }
+  std::vector<long long> materialLabels{ this->BackgroundLabel };
+  materialLabels.insert(materialLabels.end(), body.begin(), body.end());
+  this->UpdateProgress(0.2);
+  if (this->CheckAbort())
+  {
+    return 1;
+  }
+
+  stmSMPExecutor executor(this);
+  executor.SetProgressRange(0.2, 0.9);
+  std::string error;
+  const bool built = geometry.Dimension == 3
+    ? BuildTree<3>(materials, voxelDims, geometry, materialLabels, this->MaxCellSize, executor, output, error)
+    : BuildTree<2>(materials, voxelDims, geometry, materialLabels, this->MaxCellSize, executor, output, error);
+  if (!built)
+  {
+    if (!this->GetAbortExecute())
+    {
+      vtkErrorMacro("ImageToSpacetree failed: " << error);
+      return 0;
+    }
+    output->Initialize();
+    return 1;
+  }
+  this->UpdateProgress(1.0);
+  return 1;
+}

@@ -1,0 +1,67 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @brief   the spacetree as a VTK dataset, and back (private to the module)
+ *
+ * A spacetree travels between the filters (and to files) as a vtkUnstructuredGrid: one
+ * hexahedron (quad in 2D) per leaf on shared corner points, cell arrays "Level", "Material"
+ * and "LatticeIndex", and field data holding the root grid, the image geometry and the
+ * material table. Reading validates everything, including that the leaves partition the root
+ * grid, so a corrupt or hand-edited dataset gets an error instead of a broken mesh.
+ */
+
+#ifndef stmSpacetreeData_h
+#define stmSpacetreeData_h
+
+#include "Spacetree/Spacetree.h"
+
+#include <string>
+
+class vtkFieldData;
+class vtkUnstructuredGrid;
+
+/// Where the spacetree lattice sits in physical space.
+struct stmSpacetreeGeometry
+{
+  /// 2 or 3.
+  int Dimension = 3;
+  /// The image axis (0, 1, 2) of each spacetree axis.
+  int ImageAxes[3] = { 0, 1, 2 };
+  /// Physical position of lattice point 0 (the outer corner of the first voxel).
+  double Origin[3] = { 0, 0, 0 };
+  /// Physical vector of one lattice unit (one voxel edge) along each image axis.
+  double AxisVectors[3][3] = { { 1, 0, 0 }, { 0, 1, 0 }, { 0, 0, 1 } };
+
+  /// x = Origin + sum_i lattice[i] * AxisVectors[ImageAxes[i]], for Dimension coordinates.
+  void ToPhysical(const double* lattice, double x[3]) const
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      x[c] = this->Origin[c];
+    }
+    for (int i = 0; i < this->Dimension; ++i)
+    {
+      const double* axis = this->AxisVectors[this->ImageAxes[i]];
+      for (int c = 0; c < 3; ++c)
+      {
+        x[c] += lattice[i] * axis[c];
+      }
+    }
+  }
+};
+
+namespace stmSpacetreeData
+{
+/// Reads the geometry (and so the dimension) from the field data of a spacetree dataset.
+bool ReadGeometry(vtkFieldData* fieldData, stmSpacetreeGeometry& geometry, std::string& error);
+
+/// Rebuilds the core spacetree; false with a message if anything is missing or inconsistent.
+template <int Dim>
+bool ReadSpacetree(vtkUnstructuredGrid* input, stm::Spacetree<Dim>& tree, std::string& error);
+
+/// Writes the spacetree and its geometry into an (empty) unstructured grid.
+template <int Dim>
+void WriteSpacetree(
+  const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry, vtkUnstructuredGrid* output);
+}
+
+#endif
