@@ -31,7 +31,7 @@ namespace
 /// Fills the connectivity straight into a vtkCellArray of the given storage type.
 template <class StorageArray, class IdType, int Dim>
 vtkSmartPointer<vtkCellArray> WriteCells(const stm::SpacetreeTessellator<Dim>& tessellator,
-  std::vector<stm::MaterialIndex>& materialIndices, stmSMPExecutor& executor)
+  std::vector<stm::MaterialIndex>& materialIndices, bool mirrored, stmSMPExecutor& executor)
 {
   const std::int64_t cells = tessellator.GetNumberOfSimplices();
   vtkNew<StorageArray> offsets;
@@ -45,10 +45,20 @@ vtkSmartPointer<vtkCellArray> WriteCells(const stm::SpacetreeTessellator<Dim>& t
       offsetValues[i] = static_cast<IdType>(i * (Dim + 1));
     }
   });
-  if (!tessellator.WriteSimplices(connectivity->GetPointer(0), materialIndices.data(), executor)
-         .IsOk())
+  IdType* ids = connectivity->GetPointer(0);
+  if (!tessellator.WriteSimplices(ids, materialIndices.data(), executor).IsOk())
   {
     return nullptr;
+  }
+  if (mirrored)
+  {
+    // The core orients in lattice coordinates; a mirroring image direction flips every cell.
+    vtkSMPTools::For(0, cells, [&](vtkIdType begin, vtkIdType end) {
+      for (vtkIdType c = begin; c < end; ++c)
+      {
+        std::swap(ids[c * (Dim + 1)], ids[c * (Dim + 1) + 1]);
+      }
+    });
   }
   vtkNew<vtkCellArray> cellArray;
   cellArray->SetData(offsets, connectivity);
@@ -96,13 +106,24 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
     return false;
   }
 
+  // A 3D lattice-to-physical map with negative determinant turns positive cells inside out.
+  bool mirrored = false;
+  if (Dim == 3)
+  {
+    const double(*a)[3] = geometry.AxisVectors;
+    const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+      a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+      a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+    mirrored = det < 0;
+  }
+
   // Cells, 32-bit connectivity whenever the sizes allow.
   std::vector<stm::MaterialIndex> materialIndices(static_cast<std::size_t>(cells));
   const bool fits32 = cells * (Dim + 1) < std::numeric_limits<std::int32_t>::max() &&
     numberOfPoints < std::numeric_limits<std::int32_t>::max();
   vtkSmartPointer<vtkCellArray> cellArray = fits32
-    ? WriteCells<vtkTypeInt32Array, vtkTypeInt32, Dim>(tessellator, materialIndices, executor)
-    : WriteCells<vtkTypeInt64Array, vtkTypeInt64, Dim>(tessellator, materialIndices, executor);
+    ? WriteCells<vtkTypeInt32Array, vtkTypeInt32, Dim>(tessellator, materialIndices, mirrored, executor)
+    : WriteCells<vtkTypeInt64Array, vtkTypeInt64, Dim>(tessellator, materialIndices, mirrored, executor);
   if (!cellArray)
   {
     error = "execution aborted";

@@ -1,0 +1,143 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Helpers shared by the filter tests: synthetic label images, the pipeline, and the conversion
+// of a VTK mesh into the core's invariant checker.
+
+#ifndef stmFilterTestUtilities_h
+#define stmFilterTestUtilities_h
+
+#include "stmImageToSpacetree.h"
+#include "stmSpacetreeBalance.h"
+#include "stmSpacetreeTessellate.h"
+
+#include "Check/MeshInvariants.h"
+
+#include "vtkCellData.h"
+#include "vtkCellTypes.h"
+#include "vtkDataArray.h"
+#include "vtkImageData.h"
+#include "vtkNew.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
+#include "vtkSmartPointer.h"
+#include "vtkUnsignedShortArray.h"
+#include "vtkUnstructuredGrid.h"
+
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <vector>
+
+namespace stmTest
+{
+
+/// A point-data label image: label(i, j, k) for every voxel.
+inline vtkSmartPointer<vtkImageData> MakeLabelImage(const int dims[3], const double spacing[3],
+  const double origin[3], const std::function<int(int, int, int)>& label)
+{
+  auto image = vtkSmartPointer<vtkImageData>::New();
+  image->SetDimensions(dims[0], dims[1], dims[2]);
+  image->SetSpacing(spacing[0], spacing[1], spacing[2]);
+  image->SetOrigin(origin[0], origin[1], origin[2]);
+  vtkNew<vtkUnsignedShortArray> labels;
+  labels->SetName("labels");
+  labels->SetNumberOfValues(static_cast<vtkIdType>(dims[0]) * dims[1] * dims[2]);
+  vtkIdType id = 0;
+  for (int k = 0; k < dims[2]; ++k)
+  {
+    for (int j = 0; j < dims[1]; ++j)
+    {
+      for (int i = 0; i < dims[0]; ++i)
+      {
+        labels->SetValue(id++, static_cast<unsigned short>(label(i, j, k)));
+      }
+    }
+  }
+  image->GetPointData()->SetScalars(labels);
+  return image;
+}
+
+/// Nested ellipsoids: 2 inside 1 inside background, plus a small separate ball of label 5.
+inline int NestedEllipsoids(int i, int j, int k, const int dims[3])
+{
+  const double x = (i + 0.5) / dims[0] - 0.5, y = (j + 0.5) / dims[1] - 0.5,
+               z = dims[2] > 1 ? (k + 0.5) / dims[2] - 0.5 : 0.0;
+  const double outer = x * x / 0.16 + y * y / 0.1 + z * z / 0.12;
+  const double inner = (x - 0.05) * (x - 0.05) / 0.03 + y * y / 0.05 + z * z / 0.02;
+  const double small = (x - 0.38) * (x - 0.38) + (y - 0.38) * (y - 0.38) + z * z;
+  return inner < 1.0 ? 2 : outer < 1.0 ? 1 : small < 0.006 ? 5 : 0;
+}
+
+/// Voxel count per label of a point-data label image.
+inline std::map<long long, long long> CountLabels(vtkImageData* image)
+{
+  std::map<long long, long long> counts;
+  vtkDataArray* labels = image->GetPointData()->GetScalars();
+  for (vtkIdType v = 0; v < labels->GetNumberOfTuples(); ++v)
+  {
+    ++counts[static_cast<long long>(labels->GetComponent(v, 0))];
+  }
+  return counts;
+}
+
+struct Pipeline
+{
+  vtkNew<stmImageToSpacetree> Tree;
+  vtkNew<stmSpacetreeBalance> Balance;
+  vtkNew<stmSpacetreeTessellate> Tessellate;
+
+  /// balanceLevel 0: no balancing.
+  vtkUnstructuredGrid* Run(vtkImageData* image, int balanceLevel, int cellTemplate = 0)
+  {
+    this->Tree->SetInputData(image);
+    this->Balance->SetInputConnection(this->Tree->GetOutputPort());
+    this->Balance->SetBalanceLevel(std::max(1, balanceLevel));
+    this->Tessellate->SetCellTemplate(cellTemplate);
+    if (balanceLevel > 0)
+    {
+      this->Tessellate->SetInputConnection(this->Balance->GetOutputPort());
+    }
+    else
+    {
+      this->Tessellate->SetInputConnection(this->Tree->GetOutputPort());
+    }
+    this->Tessellate->Update();
+    return this->Tessellate->GetOutput();
+  }
+};
+
+/// Runs the core invariant checks on a VTK simplicial mesh. Coordinates are projected on the
+/// given axes (for 2D meshes, the plane's axes).
+template <int Dim>
+stm::MeshInvariantReport CheckMesh(vtkUnstructuredGrid* mesh, const int axes[Dim], double tolerance)
+{
+  std::vector<double> points(static_cast<std::size_t>(mesh->GetNumberOfPoints()) * Dim);
+  for (vtkIdType p = 0; p < mesh->GetNumberOfPoints(); ++p)
+  {
+    double x[3];
+    mesh->GetPoint(p, x);
+    for (int a = 0; a < Dim; ++a)
+    {
+      points[p * Dim + a] = x[axes[a]];
+    }
+  }
+  std::vector<std::int64_t> cells;
+  cells.reserve(static_cast<std::size_t>(mesh->GetNumberOfCells()) * (Dim + 1));
+  std::vector<std::int64_t> materials;
+  vtkDataArray* material = mesh->GetCellData()->GetArray("Material");
+  vtkNew<vtkIdList> ids;
+  for (vtkIdType c = 0; c < mesh->GetNumberOfCells(); ++c)
+  {
+    mesh->GetCellPoints(c, ids);
+    for (vtkIdType v = 0; v < ids->GetNumberOfIds(); ++v)
+    {
+      cells.push_back(ids->GetId(v));
+    }
+    materials.push_back(material ? static_cast<std::int64_t>(material->GetComponent(c, 0)) : 0);
+  }
+  return stm::CheckSimplicialMesh<Dim>(points, cells, &materials, tolerance);
+}
+
+} // namespace stmTest
+
+#endif
