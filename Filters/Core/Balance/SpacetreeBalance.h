@@ -17,8 +17,11 @@
 #include "../Spacetree/LevelMap.h"
 #include "../Spacetree/Spacetree.h"
 
+#include <algorithm>
 #include <cstdint>
+#include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace stm
@@ -61,6 +64,69 @@ std::vector<LatticeIndex<Dim>> NeighborDirections(bool facetsOnly)
 template <int Dim>
 class SpacetreeBalancer
 {
+  /// Finds, for the leaves of one level, the neighbouring cells that lie in too coarse a leaf.
+  struct ScanKernel
+  {
+    using Scratch = NoScratch;
+    const LevelMap<Dim>* Map;
+    const std::vector<LatticeIndex<Dim>>* Leaves;
+    const std::vector<LatticeIndex<Dim>>* Directions;
+    int Level;
+    int CoarsestAllowed;
+    std::int64_t Size;
+    /// (first leaf of the range, cells found), one entry per range.
+    mutable std::vector<std::pair<std::int64_t, std::vector<LatticeIndex<Dim>>>> Found;
+    mutable std::mutex FoundLock;
+
+    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    {
+      std::vector<LatticeIndex<Dim>> found;
+      for (std::int64_t i = begin; i < end; ++i)
+      {
+        const LatticeIndex<Dim>& anchor = (*this->Leaves)[i];
+        if (this->Map->LevelAt(anchor) != this->Level)
+        {
+          continue; // split since it was queued
+        }
+        for (const auto& direction : *this->Directions)
+        {
+          LatticeIndex<Dim> sample;
+          bool inside = true;
+          for (int axis = 0; axis < Dim; ++axis)
+          {
+            sample[axis] = direction[axis] < 0 ? anchor[axis] - 1
+              : direction[axis] > 0            ? anchor[axis] + this->Size
+                                               : anchor[axis];
+            inside = inside && sample[axis] >= 0 && sample[axis] < this->Map->GetDimensions()[axis];
+          }
+          if (inside && this->Map->LevelAt(sample) < this->CoarsestAllowed)
+          {
+            found.push_back(sample);
+          }
+        }
+      }
+      if (!found.empty())
+      {
+        std::lock_guard<std::mutex> lock(this->FoundLock);
+        this->Found.emplace_back(begin, std::move(found));
+      }
+    }
+
+    /// The cells found, in leaf order whatever the order in which the ranges ran.
+    std::vector<LatticeIndex<Dim>> TakeFound() const
+    {
+      std::sort(this->Found.begin(), this->Found.end(),
+        [](const auto& x, const auto& y) { return x.first < y.first; });
+      std::vector<LatticeIndex<Dim>> all;
+      for (auto& range : this->Found)
+      {
+        all.insert(all.end(), range.second.begin(), range.second.end());
+      }
+      this->Found.clear();
+      return all;
+    }
+  };
+
 public:
   template <class Executor>
   Status Balance(Spacetree<Dim>& tree, const SpacetreeBalanceOptions& options, Executor& executor)
@@ -85,57 +151,36 @@ public:
     const auto directions = NeighborDirections<Dim>(options.FaceBalanceOnly);
     const int L = options.BalanceLevel;
 
-    std::int64_t processed = 0;
-    const std::int64_t initialLeaves = tree.GetNumberOfLeaves();
     for (int level = tree.MaxLevel; level > L; --level)
     {
-      const std::int64_t size = tree.GetCellSize(level);
-      auto& leaves = leavesByLevel[level];
-      // Splits only append to coarser-level lists, never to this one.
-      for (std::size_t i = 0; i < leaves.size(); ++i)
+      if (executor.ShouldAbort())
       {
-        if ((++processed & 0xFFFF) == 0)
+        return Status::Aborted();
+      }
+      executor.ReportProgress(0.1 + 0.8 * (tree.MaxLevel - level) / tree.MaxLevel);
+      // The scan reads the map only; the splits it asks for are applied afterwards. Splitting is
+      // idempotent ("until the sample cell is fine enough"), so the result does not depend on
+      // the order of the requests, nor on the number of threads.
+      auto& leaves = leavesByLevel[level];
+      ScanKernel scan{ &map, &leaves, &directions, level, level - L, tree.GetCellSize(level), {}, {} };
+      executor.For(0, static_cast<std::int64_t>(leaves.size()), 4096, scan);
+      const std::vector<LatticeIndex<Dim>> requests = scan.TakeFound();
+      for (const LatticeIndex<Dim>& sample : requests)
+      {
+        for (int neighborLevel = map.LevelAt(sample); neighborLevel < level - L;
+             neighborLevel = map.LevelAt(sample))
         {
-          if (executor.ShouldAbort())
+          const LatticeIndex<Dim> neighborAnchor = map.AnchorOf(sample, neighborLevel);
+          map.Split(neighborAnchor, neighborLevel);
+          const std::int64_t half = tree.GetCellSize(neighborLevel + 1);
+          for (int child = 0; child < CubeInfo<Dim>::VerticesPerCell; ++child)
           {
-            return Status::Aborted();
-          }
-          executor.ReportProgress(
-            0.9 * std::min(1.0, static_cast<double>(processed) / static_cast<double>(initialLeaves)));
-        }
-        const LatticeIndex<Dim> anchor = leaves[i];
-        if (map.LevelAt(anchor) != level)
-        {
-          continue; // split since it was queued
-        }
-        for (const auto& direction : directions)
-        {
-          LatticeIndex<Dim> sample;
-          for (int axis = 0; axis < Dim; ++axis)
-          {
-            sample[axis] = direction[axis] < 0 ? anchor[axis] - 1
-              : direction[axis] > 0            ? anchor[axis] + size
-                                               : anchor[axis];
-          }
-          if (!map.Contains(sample))
-          {
-            continue;
-          }
-          for (int neighborLevel = map.LevelAt(sample); neighborLevel < level - L;
-               neighborLevel = map.LevelAt(sample))
-          {
-            const LatticeIndex<Dim> neighborAnchor = map.AnchorOf(sample, neighborLevel);
-            map.Split(neighborAnchor, neighborLevel);
-            const std::int64_t half = tree.GetCellSize(neighborLevel + 1);
-            for (int child = 0; child < CubeInfo<Dim>::VerticesPerCell; ++child)
+            LatticeIndex<Dim> childAnchor = neighborAnchor;
+            for (int axis = 0; axis < Dim; ++axis)
             {
-              LatticeIndex<Dim> childAnchor = neighborAnchor;
-              for (int axis = 0; axis < Dim; ++axis)
-              {
-                childAnchor[axis] += ((child >> axis) & 1) * half;
-              }
-              leavesByLevel[neighborLevel + 1].push_back(childAnchor);
+              childAnchor[axis] += ((child >> axis) & 1) * half;
             }
+            leavesByLevel[neighborLevel + 1].push_back(childAnchor);
           }
         }
       }

@@ -12,6 +12,7 @@
 #include "Spacetree.h"
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace stm
@@ -28,8 +29,11 @@ public:
     this->RootGridDimensions = tree.RootGridDimensions;
     this->Dimensions = tree.GetLatticeDimensions();
     const std::int64_t cells = NumberOfLatticeCells<Dim>(this->Dimensions);
-    this->Levels.assign(static_cast<std::size_t>(cells), 0);
-    this->Materials.assign(static_cast<std::size_t>(cells), BackgroundMaterial);
+    // Left uninitialised: the leaves partition the lattice, so the fill writes every cell (and
+    // touches the memory from the threads that will use it).
+    this->Levels.reset(new std::uint8_t[static_cast<std::size_t>(cells)]);
+    this->Materials.reset(new MaterialIndex[static_cast<std::size_t>(cells)]);
+    this->NumberOfCells = cells;
 
     struct FillKernel
     {
@@ -161,7 +165,7 @@ public:
     return Status::Ok();
   }
 
-  std::size_t GetMemorySize() const { return this->Levels.size() * 3; }
+  std::size_t GetMemorySize() const { return static_cast<std::size_t>(this->NumberOfCells) * 3; }
 
 private:
   void CollectNode(const LatticeIndex<Dim>& anchor, int level, Spacetree<Dim>& out) const
@@ -208,8 +212,9 @@ private:
   int MaxLevel = 0;
   LatticeIndex<Dim> RootGridDimensions{};
   LatticeIndex<Dim> Dimensions{};
-  std::vector<std::uint8_t> Levels;
-  std::vector<MaterialIndex> Materials;
+  std::int64_t NumberOfCells = 0;
+  std::unique_ptr<std::uint8_t[]> Levels;
+  std::unique_ptr<MaterialIndex[]> Materials;
 };
 
 } // namespace stm
