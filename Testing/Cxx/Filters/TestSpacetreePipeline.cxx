@@ -13,6 +13,7 @@
 #include "vtkFloatArray.h"
 #include "vtkIntArray.h"
 #include "vtkMatrix3x3.h"
+#include "vtkMeshQuality.h"
 #include "vtkNIFTIImageReader.h"
 #include "vtkPolyData.h"
 #include "vtkSMPTools.h"
@@ -242,6 +243,57 @@ INSTANTIATE_TEST_SUITE_P(DimensionsAndBalance, SyntheticPipeline,
     return std::to_string(info.param.Dimension) + "D_L" + std::to_string(info.param.BalanceLevel) +
       (info.param.CellTemplate == 0 ? "_Checkerboard" : "_Kuhn");
   });
+
+/// Element quality never exceeds the worst case observed over the AAL atlas and random images
+/// (docs/quality.md, isotropic voxels): the tessellation yields a finite set of shapes per
+/// balance level, and a regression that made worse elements would show here.
+TEST_P(SyntheticPipeline, QualityWithinObservedBounds)
+{
+  const Case c = GetParam();
+  if (c.BalanceLevel == 0)
+  {
+    GTEST_SKIP() << "an unbalanced tree has no level-specific bound";
+  }
+  const int dims[3] = { 45, 38, c.Dimension == 3 ? 31 : 1 };
+  const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
+  auto image = stmTest::MakeLabelImage(
+    dims, spacing, origin, [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
+  stmTest::Pipeline pipeline;
+  vtkUnstructuredGrid* mesh = pipeline.Run(image, c.BalanceLevel, c.CellTemplate);
+
+  struct Bound
+  {
+    double Condition;
+    double Angle;
+  };
+  static const Bound bounds2D[3] = { { 1.155, 45.0 }, { 2.021, 18.43 }, { 4.186, 8.13 } };
+  static const Bound checkerboard3D[3] = { { 1.318, 45.0 }, { 2.208, 18.43 }, { 5.016, 8.13 } };
+  static const Bound kuhn3D[3] = { { 1.563, 35.26 }, { 2.833, 18.43 }, { 5.828, 8.13 } };
+  const Bound bound = c.Dimension == 2 ? bounds2D[c.BalanceLevel - 1]
+    : c.CellTemplate == 0              ? checkerboard3D[c.BalanceLevel - 1]
+                                       : kuhn3D[c.BalanceLevel - 1];
+  vtkNew<vtkMeshQuality> condition;
+  condition->SetInputData(mesh);
+  condition->SetTetQualityMeasureToCondition();
+  condition->SetTriangleQualityMeasureToCondition();
+  condition->Update();
+  const double worst =
+    vtkDataSet::SafeDownCast(condition->GetOutput())->GetCellData()->GetArray("Quality")->GetRange()[1];
+  vtkNew<vtkMeshQuality> angle;
+  angle->SetInputData(mesh);
+  angle->SetTetQualityMeasureToMinAngle();
+  angle->SetTriangleQualityMeasureToMinAngle();
+  angle->Update();
+  const double smallest =
+    vtkDataSet::SafeDownCast(angle->GetOutput())->GetCellData()->GetArray("Quality")->GetRange()[0];
+  // The bounds are printed rounded to 3 decimals (condition) and 2 (angle).
+  EXPECT_LE(worst, bound.Condition + 5e-4);
+  EXPECT_GE(smallest, bound.Angle - 5e-3);
+  if (c.BalanceLevel == 1)
+  {
+    EXPECT_NEAR(smallest, bound.Angle, 5e-3) << "L = 1 meshes are made of the best shapes only";
+  }
+}
 
 TEST(SpacetreePipeline, BalanceOnlyRefinesAndKeepsMaterials)
 {
