@@ -68,8 +68,8 @@ void BM_ImageToSpacetree(benchmark::State& state)
     leaves = tree->GetOutput()->GetNumberOfCells();
   }
   state.counters["leaves"] = static_cast<double>(leaves);
-  state.counters["voxels/s"] =
-    benchmark::Counter(static_cast<double>(image->GetNumberOfPoints()), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["voxels/s"] = benchmark::Counter(
+    static_cast<double>(image->GetNumberOfPoints()), benchmark::Counter::kIsIterationInvariantRate);
 }
 
 void BM_SpacetreeBalance(benchmark::State& state)
@@ -124,8 +124,18 @@ void BM_AllThreeStages(benchmark::State& state)
 }
 
 BENCHMARK(BM_ImageToSpacetree)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_SpacetreeBalance)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_SpacetreeTessellate)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SpacetreeBalance)
+  ->Arg(1)
+  ->Arg(2)
+  ->Arg(3)
+  ->Unit(benchmark::kMillisecond)
+  ->UseRealTime();
+BENCHMARK(BM_SpacetreeTessellate)
+  ->Arg(1)
+  ->Arg(2)
+  ->Arg(3)
+  ->Unit(benchmark::kMillisecond)
+  ->UseRealTime();
 BENCHMARK(BM_AllThreeStages)->Unit(benchmark::kMillisecond)->UseRealTime();
 } // namespace
 
@@ -148,7 +158,8 @@ int main(int argc, char** argv)
   vtkSMPTools::Initialize(threads);
   benchmark::Initialize(&argc, argv);
   benchmark::AddCustomContext("smp_backend", vtkSMPTools::GetBackend());
-  benchmark::AddCustomContext("smp_threads", std::to_string(vtkSMPTools::GetEstimatedNumberOfThreads()));
+  benchmark::AddCustomContext(
+    "smp_threads", std::to_string(vtkSMPTools::GetEstimatedNumberOfThreads()));
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

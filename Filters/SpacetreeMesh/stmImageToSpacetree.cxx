@@ -122,25 +122,29 @@ struct MapToMaterials
       {
         table[body[i] - lo] = static_cast<stm::MaterialIndex>(i + 1);
       }
-      vtkSMPTools::For(0, values.size(), [&](vtkIdType begin, vtkIdType end) {
+      vtkSMPTools::For(0, values.size(),
+        [&](vtkIdType begin, vtkIdType end)
+        {
+          for (vtkIdType v = begin; v < end; ++v)
+          {
+            const long long label = static_cast<long long>(values[v]);
+            out[v] = (label < lo || label > hi) ? stm::BackgroundMaterial : table[label - lo];
+          }
+        });
+      return;
+    }
+    vtkSMPTools::For(0, values.size(),
+      [&](vtkIdType begin, vtkIdType end)
+      {
         for (vtkIdType v = begin; v < end; ++v)
         {
           const long long label = static_cast<long long>(values[v]);
-          out[v] = (label < lo || label > hi) ? stm::BackgroundMaterial : table[label - lo];
+          const auto it = std::lower_bound(body.begin(), body.end(), label);
+          out[v] = (it != body.end() && *it == label)
+            ? static_cast<stm::MaterialIndex>(it - body.begin() + 1)
+            : stm::BackgroundMaterial;
         }
       });
-      return;
-    }
-    vtkSMPTools::For(0, values.size(), [&](vtkIdType begin, vtkIdType end) {
-      for (vtkIdType v = begin; v < end; ++v)
-      {
-        const long long label = static_cast<long long>(values[v]);
-        const auto it = std::lower_bound(body.begin(), body.end(), label);
-        out[v] = (it != body.end() && *it == label)
-          ? static_cast<stm::MaterialIndex>(it - body.begin() + 1)
-          : stm::BackgroundMaterial;
-      }
-    });
   }
 };
 
@@ -174,8 +178,8 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
 stmImageToSpacetree::stmImageToSpacetree()
 {
   // Default label array: the active scalars, point data first.
-  this->SetInputArrayToProcess(0, 0, 0, vtkDataObject::FIELD_ASSOCIATION_POINTS_THEN_CELLS,
-    vtkDataSetAttributes::SCALARS);
+  this->SetInputArrayToProcess(
+    0, 0, 0, vtkDataObject::FIELD_ASSOCIATION_POINTS_THEN_CELLS, vtkDataSetAttributes::SCALARS);
 }
 
 stmImageToSpacetree::~stmImageToSpacetree() = default;
@@ -217,7 +221,7 @@ void stmImageToSpacetree::SetBodyLabel(int index, int label)
 int stmImageToSpacetree::GetBodyLabel(int index) const
 {
   return (index >= 0 && index < static_cast<int>(this->BodyLabels.size())) ? this->BodyLabels[index]
-                                                                            : 0;
+                                                                           : 0;
 }
 
 void stmImageToSpacetree::AddBodyLabel(int label)
@@ -279,8 +283,8 @@ int stmImageToSpacetree::RequestData(
   }
   if (labels->GetNumberOfComponents() != 1)
   {
-    vtkErrorMacro("The label array \"" << (labels->GetName() ? labels->GetName() : "")
-                                       << "\" has " << labels->GetNumberOfComponents()
+    vtkErrorMacro("The label array \"" << (labels->GetName() ? labels->GetName() : "") << "\" has "
+                                       << labels->GetNumberOfComponents()
                                        << " components; it must have one.");
     return 0;
   }
@@ -309,15 +313,15 @@ int stmImageToSpacetree::RequestData(
       geometry.ImageAxes[geometry.Dimension++] = axis;
     }
   }
-  if (labels->GetNumberOfTuples() != static_cast<vtkIdType>(voxelDims[0]) * voxelDims[1] * voxelDims[2])
+  if (labels->GetNumberOfTuples() !=
+    static_cast<vtkIdType>(voxelDims[0]) * voxelDims[1] * voxelDims[2])
   {
     vtkErrorMacro("The label array does not have one value per voxel.");
     return 0;
   }
   if (geometry.Dimension < 2)
   {
-    vtkErrorMacro("The image has " << voxelDims[0] << " x " << voxelDims[1] << " x "
-                                   << voxelDims[2]
+    vtkErrorMacro("The image has " << voxelDims[0] << " x " << voxelDims[1] << " x " << voxelDims[2]
                                    << " voxels; ImageToSpacetree needs a 2D or 3D image.");
     return 0;
   }
@@ -411,7 +415,8 @@ int stmImageToSpacetree::RequestData(
   }
   if (body.size() > 65535)
   {
-    vtkErrorMacro("The body of interest has " << body.size() << " labels; at most 65535 are supported.");
+    vtkErrorMacro(
+      "The body of interest has " << body.size() << " labels; at most 65535 are supported.");
     return 0;
   }
   std::vector<stm::MaterialIndex> materials(static_cast<std::size_t>(labels->GetNumberOfTuples()));
@@ -432,8 +437,10 @@ int stmImageToSpacetree::RequestData(
   executor.SetProgressRange(0.2, 0.9);
   std::string error;
   const bool built = geometry.Dimension == 3
-    ? BuildTree<3>(materials, voxelDims, geometry, materialLabels, this->MaxCellSize, executor, output, error)
-    : BuildTree<2>(materials, voxelDims, geometry, materialLabels, this->MaxCellSize, executor, output, error);
+    ? BuildTree<3>(
+        materials, voxelDims, geometry, materialLabels, this->MaxCellSize, executor, output, error)
+    : BuildTree<2>(
+        materials, voxelDims, geometry, materialLabels, this->MaxCellSize, executor, output, error);
   if (!built)
   {
     if (!this->GetAbortExecute())

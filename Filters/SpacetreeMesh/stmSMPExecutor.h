@@ -54,8 +54,8 @@ public:
     {
       return true;
     }
-    const bool designated = vtkSMPTools::IsParallelScope() ? vtkSMPTools::GetSingleThread()
-                                                           : this->IsMainThread();
+    const bool designated =
+      vtkSMPTools::IsParallelScope() ? vtkSMPTools::GetSingleThread() : this->IsMainThread();
     if (designated && this->Algorithm->CheckAbort())
     {
       this->Aborted = true;
@@ -78,7 +78,10 @@ private:
   {
     Kernel* Work;
     vtkSMPThreadLocal<typename Kernel::Scratch> Scratch;
-    void operator()(vtkIdType begin, vtkIdType end) { (*this->Work)(this->Scratch.Local(), begin, end); }
+    void operator()(vtkIdType begin, vtkIdType end)
+    {
+      (*this->Work)(this->Scratch.Local(), begin, end);
+    }
   };
 
   bool IsMainThread() const { return std::this_thread::get_id() == this->MainThread; }

@@ -17,9 +17,9 @@
 #include "vtkUnstructuredGrid.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
-#include <atomic>
 #include <utility>
 #include <vector>
 
@@ -63,11 +63,12 @@ void AddDoubleArray(vtkFieldData* fd, const char* name, const double* values, in
 }
 
 /// Reads an integer field array of exactly `count` values (count < 0: any count >= 0).
-bool GetInts(vtkFieldData* fd, const char* name, int count, std::vector<long long>& values,
-  std::string& error)
+bool GetInts(
+  vtkFieldData* fd, const char* name, int count, std::vector<long long>& values, std::string& error)
 {
   vtkDataArray* array = fd ? fd->GetArray(name) : nullptr;
-  if (!array || array->GetNumberOfComponents() != 1 || (count >= 0 && array->GetNumberOfTuples() != count))
+  if (!array || array->GetNumberOfComponents() != 1 ||
+    (count >= 0 && array->GetNumberOfTuples() != count))
   {
     error = std::string("the spacetree's field data lack a valid array \"") + name +
       "\"; is the input the output of ImageToSpacetree?";
@@ -167,41 +168,44 @@ bool ReadLeaves(vtkDataArray* levels, vtkDataArray* materials, vtkDataArray* ind
   auto* typedMaterials = vtkIntArray::SafeDownCast(materials);
   auto* typedIndices = vtkIntArray::SafeDownCast(indices);
   std::atomic<vtkIdType> firstBadLeaf{ leaves };
-  vtkSMPTools::For(0, leaves, [&](vtkIdType begin, vtkIdType end) {
-    for (vtkIdType leaf = begin; leaf < end; ++leaf)
+  vtkSMPTools::For(0, leaves,
+    [&](vtkIdType begin, vtkIdType end)
     {
-      const double level = typedLevels ? typedLevels->GetValue(leaf) : levels->GetComponent(leaf, 0);
-      const double label =
-        typedMaterials ? typedMaterials->GetValue(leaf) : materials->GetComponent(leaf, 0);
-      const auto found = std::lower_bound(sortedLabels.begin(), sortedLabels.end(),
-        std::make_pair(static_cast<long long>(label), stm::MaterialIndex{ 0 }));
-      bool good = level >= 0 && level <= tree.MaxLevel && level == std::floor(level) &&
-        found != sortedLabels.end() && static_cast<double>(found->first) == label;
-      stm::LatticeIndex<Dim> anchor{};
-      if (good)
+      for (vtkIdType leaf = begin; leaf < end; ++leaf)
       {
-        const std::int64_t size = tree.GetCellSize(static_cast<int>(level));
-        for (int axis = 0; axis < Dim; ++axis)
+        const double level =
+          typedLevels ? typedLevels->GetValue(leaf) : levels->GetComponent(leaf, 0);
+        const double label =
+          typedMaterials ? typedMaterials->GetValue(leaf) : materials->GetComponent(leaf, 0);
+        const auto found = std::lower_bound(sortedLabels.begin(), sortedLabels.end(),
+          std::make_pair(static_cast<long long>(label), stm::MaterialIndex{ 0 }));
+        bool good = level >= 0 && level <= tree.MaxLevel && level == std::floor(level) &&
+          found != sortedLabels.end() && static_cast<double>(found->first) == label;
+        stm::LatticeIndex<Dim> anchor{};
+        if (good)
         {
-          const double index = typedIndices ? typedIndices->GetTypedComponent(leaf, axis)
-                                            : indices->GetComponent(leaf, axis);
-          good = good && index >= 0 && index < 2147483648.0 && index == std::floor(index);
-          anchor[axis] = good ? static_cast<std::int64_t>(index) * size : 0;
+          const std::int64_t size = tree.GetCellSize(static_cast<int>(level));
+          for (int axis = 0; axis < Dim; ++axis)
+          {
+            const double index = typedIndices ? typedIndices->GetTypedComponent(leaf, axis)
+                                              : indices->GetComponent(leaf, axis);
+            good = good && index >= 0 && index < 2147483648.0 && index == std::floor(index);
+            anchor[axis] = good ? static_cast<std::int64_t>(index) * size : 0;
+          }
         }
-      }
-      if (!good)
-      {
-        vtkIdType expected = firstBadLeaf.load();
-        while (leaf < expected && !firstBadLeaf.compare_exchange_weak(expected, leaf))
+        if (!good)
         {
+          vtkIdType expected = firstBadLeaf.load();
+          while (leaf < expected && !firstBadLeaf.compare_exchange_weak(expected, leaf))
+          {
+          }
+          continue;
         }
-        continue;
+        tree.LeafLevels[leaf] = static_cast<std::uint8_t>(level);
+        tree.LeafAnchors[leaf] = anchor;
+        tree.LeafMaterials[leaf] = found->second;
       }
-      tree.LeafLevels[leaf] = static_cast<std::uint8_t>(level);
-      tree.LeafAnchors[leaf] = anchor;
-      tree.LeafMaterials[leaf] = found->second;
-    }
-  });
+    });
   if (firstBadLeaf.load() < leaves)
   {
     error = "leaf " + std::to_string(firstBadLeaf.load()) +
@@ -317,12 +321,13 @@ bool ReadSpacetree(vtkUnstructuredGrid* input, stm::Spacetree<Dim>& tree, std::s
 }
 
 template <int Dim>
-void WriteSpacetree(
-  const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry, vtkUnstructuredGrid* output)
+void WriteSpacetree(const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry,
+  vtkUnstructuredGrid* output)
 {
   constexpr int n = stm::CubeInfo<Dim>::VerticesPerCell;
   const vtkIdType leaves = tree.GetNumberOfLeaves();
-  auto cornerOf = [&tree](vtkIdType leaf, int c) {
+  auto cornerOf = [&tree](vtkIdType leaf, int c)
+  {
     stm::LatticeIndex<Dim> corner = tree.LeafAnchors[leaf];
     const std::int64_t size = tree.GetCellSize(tree.LeafLevels[leaf]);
     for (int axis = 0; axis < Dim; ++axis)
@@ -339,30 +344,36 @@ void WriteSpacetree(
     ++vertexDims[axis];
   }
   stm::LatticeBitset<Dim> corners(vertexDims);
-  vtkSMPTools::For(0, leaves, [&](vtkIdType begin, vtkIdType end) {
-    for (vtkIdType leaf = begin; leaf < end; ++leaf)
+  vtkSMPTools::For(0, leaves,
+    [&](vtkIdType begin, vtkIdType end)
     {
-      for (int c = 0; c < n; ++c)
+      for (vtkIdType leaf = begin; leaf < end; ++leaf)
       {
-        corners.Set(cornerOf(leaf, c));
+        for (int c = 0; c < n; ++c)
+        {
+          corners.Set(cornerOf(leaf, c));
+        }
       }
-    }
-  });
+    });
   const std::int64_t numberOfPoints = corners.BuildRank();
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
   points->SetNumberOfPoints(numberOfPoints);
   double* xyz = vtkDoubleArray::SafeDownCast(points->GetData())->GetPointer(0);
-  vtkSMPTools::For(0, corners.GetNumberOfWords(), 4096, [&](vtkIdType begin, vtkIdType end) {
-    corners.VisitSetBits(begin, end, [&](std::int64_t id, const stm::LatticeIndex<Dim>& p) {
-      double lattice[3];
-      for (int axis = 0; axis < Dim; ++axis)
-      {
-        lattice[axis] = static_cast<double>(p[axis]);
-      }
-      geometry.ToPhysical(lattice, xyz + 3 * id);
+  vtkSMPTools::For(0, corners.GetNumberOfWords(), 4096,
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      corners.VisitSetBits(begin, end,
+        [&](std::int64_t id, const stm::LatticeIndex<Dim>& p)
+        {
+          double lattice[3];
+          for (int axis = 0; axis < Dim; ++axis)
+          {
+            lattice[axis] = static_cast<double>(p[axis]);
+          }
+          geometry.ToPhysical(lattice, xyz + 3 * id);
+        });
     });
-  });
   output->SetPoints(points);
 
   // Cells: VTK hexahedron / quad corner order from the binary corner codes.
@@ -386,24 +397,26 @@ void WriteSpacetree(
   unsigned char* levelValues = levels->GetPointer(0);
   int* materialValues = materials->GetPointer(0);
   int* indexValues = indices->GetPointer(0);
-  vtkSMPTools::For(0, leaves, [&](vtkIdType begin, vtkIdType end) {
-    for (vtkIdType leaf = begin; leaf < end; ++leaf)
+  vtkSMPTools::For(0, leaves,
+    [&](vtkIdType begin, vtkIdType end)
     {
-      offsetValues[leaf] = leaf * n;
-      for (int v = 0; v < n; ++v)
+      for (vtkIdType leaf = begin; leaf < end; ++leaf)
       {
-        ids[leaf * n + v] = corners.Rank(cornerOf(leaf, hexOrder[v]));
+        offsetValues[leaf] = leaf * n;
+        for (int v = 0; v < n; ++v)
+        {
+          ids[leaf * n + v] = corners.Rank(cornerOf(leaf, hexOrder[v]));
+        }
+        const int level = tree.LeafLevels[leaf];
+        levelValues[leaf] = static_cast<unsigned char>(level);
+        materialValues[leaf] = static_cast<int>(tree.MaterialLabels[tree.LeafMaterials[leaf]]);
+        for (int axis = 0; axis < Dim; ++axis)
+        {
+          indexValues[leaf * Dim + axis] =
+            static_cast<int>(tree.LeafAnchors[leaf][axis] / tree.GetCellSize(level));
+        }
       }
-      const int level = tree.LeafLevels[leaf];
-      levelValues[leaf] = static_cast<unsigned char>(level);
-      materialValues[leaf] = static_cast<int>(tree.MaterialLabels[tree.LeafMaterials[leaf]]);
-      for (int axis = 0; axis < Dim; ++axis)
-      {
-        indexValues[leaf * Dim + axis] =
-          static_cast<int>(tree.LeafAnchors[leaf][axis] / tree.GetCellSize(level));
-      }
-    }
-  });
+    });
   offsetValues[leaves] = leaves * n;
   vtkNew<vtkCellArray> cells;
   cells->SetData(offsets, connectivity);

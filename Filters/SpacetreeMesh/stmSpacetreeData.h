@@ -60,8 +60,8 @@ bool ReadSpacetree(vtkUnstructuredGrid* input, stm::Spacetree<Dim>& tree, std::s
 
 /// Writes the spacetree and its geometry into an (empty) unstructured grid.
 template <int Dim>
-void WriteSpacetree(
-  const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry, vtkUnstructuredGrid* output);
+void WriteSpacetree(const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry,
+  vtkUnstructuredGrid* output);
 }
 
 #endif

@@ -39,12 +39,14 @@ vtkSmartPointer<vtkCellArray> WriteCells(const stm::SpacetreeTessellator<Dim>& t
   offsets->SetNumberOfValues(cells + 1);
   connectivity->SetNumberOfValues(cells * (Dim + 1));
   IdType* offsetValues = offsets->GetPointer(0);
-  vtkSMPTools::For(0, cells + 1, [&](vtkIdType begin, vtkIdType end) {
-    for (vtkIdType i = begin; i < end; ++i)
+  vtkSMPTools::For(0, cells + 1,
+    [&](vtkIdType begin, vtkIdType end)
     {
-      offsetValues[i] = static_cast<IdType>(i * (Dim + 1));
-    }
-  });
+      for (vtkIdType i = begin; i < end; ++i)
+      {
+        offsetValues[i] = static_cast<IdType>(i * (Dim + 1));
+      }
+    });
   IdType* ids = connectivity->GetPointer(0);
   if (!tessellator.WriteSimplices(ids, materialIndices.data(), executor).IsOk())
   {
@@ -53,12 +55,14 @@ vtkSmartPointer<vtkCellArray> WriteCells(const stm::SpacetreeTessellator<Dim>& t
   if (mirrored)
   {
     // The core orients in lattice coordinates; a mirroring image direction flips every cell.
-    vtkSMPTools::For(0, cells, [&](vtkIdType begin, vtkIdType end) {
-      for (vtkIdType c = begin; c < end; ++c)
+    vtkSMPTools::For(0, cells,
+      [&](vtkIdType begin, vtkIdType end)
       {
-        std::swap(ids[c * (Dim + 1)], ids[c * (Dim + 1) + 1]);
-      }
-    });
+        for (vtkIdType c = begin; c < end; ++c)
+        {
+          std::swap(ids[c * (Dim + 1)], ids[c * (Dim + 1) + 1]);
+        }
+      });
   }
   vtkNew<vtkCellArray> cellArray;
   cellArray->SetData(offsets, connectivity);
@@ -91,7 +95,8 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   points->SetDataTypeToDouble();
   points->SetNumberOfPoints(numberOfPoints);
   double* xyz = vtkDoubleArray::SafeDownCast(points->GetData())->GetPointer(0);
-  auto place = [&](std::int64_t id, const stm::LatticeIndex<Dim>& halfUnits) {
+  auto place = [&](std::int64_t id, const stm::LatticeIndex<Dim>& halfUnits)
+  {
     double lattice[3];
     for (int axis = 0; axis < Dim; ++axis)
     {
@@ -122,8 +127,10 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   const bool fits32 = cells * (Dim + 1) < std::numeric_limits<std::int32_t>::max() &&
     numberOfPoints < std::numeric_limits<std::int32_t>::max();
   vtkSmartPointer<vtkCellArray> cellArray = fits32
-    ? WriteCells<vtkTypeInt32Array, vtkTypeInt32, Dim>(tessellator, materialIndices, mirrored, executor)
-    : WriteCells<vtkTypeInt64Array, vtkTypeInt64, Dim>(tessellator, materialIndices, mirrored, executor);
+    ? WriteCells<vtkTypeInt32Array, vtkTypeInt32, Dim>(
+        tessellator, materialIndices, mirrored, executor)
+    : WriteCells<vtkTypeInt64Array, vtkTypeInt64, Dim>(
+        tessellator, materialIndices, mirrored, executor);
   if (!cellArray)
   {
     error = "execution aborted";
@@ -137,12 +144,14 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   materials->SetName("Material");
   materials->SetNumberOfValues(cells);
   int* materialValues = materials->GetPointer(0);
-  vtkSMPTools::For(0, cells, [&](vtkIdType begin, vtkIdType end) {
-    for (vtkIdType c = begin; c < end; ++c)
+  vtkSMPTools::For(0, cells,
+    [&](vtkIdType begin, vtkIdType end)
     {
-      materialValues[c] = static_cast<int>(tree.MaterialLabels[materialIndices[c]]);
-    }
-  });
+      for (vtkIdType c = begin; c < end; ++c)
+      {
+        materialValues[c] = static_cast<int>(tree.MaterialLabels[materialIndices[c]]);
+      }
+    });
 
   output->SetPoints(points);
   output->SetCells(types, cellArray);
@@ -158,8 +167,8 @@ stmSpacetreeTessellate::~stmSpacetreeTessellate() = default;
 void stmSpacetreeTessellate::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "CellTemplate: "
-     << (this->CellTemplate == CHECKERBOARD ? "Checkerboard" : "Kuhn") << "\n";
+  os << indent << "CellTemplate: " << (this->CellTemplate == CHECKERBOARD ? "Checkerboard" : "Kuhn")
+     << "\n";
   os << indent << "IncludeBackground: " << (this->IncludeBackground ? "On" : "Off") << "\n";
 }
 

@@ -162,7 +162,8 @@ public:
       // idempotent ("until the sample cell is fine enough"), so the result does not depend on
       // the order of the requests, nor on the number of threads.
       auto& leaves = leavesByLevel[level];
-      ScanKernel scan{ &map, &leaves, &directions, level, level - L, tree.GetCellSize(level), {}, {} };
+      ScanKernel scan{ &map, &leaves, &directions, level, level - L, tree.GetCellSize(level), {},
+        {} };
       executor.For(0, static_cast<std::int64_t>(leaves.size()), 4096, scan);
       const std::vector<LatticeIndex<Dim>> requests = scan.TakeFound();
       for (const LatticeIndex<Dim>& sample : requests)

@@ -54,10 +54,9 @@ struct MeshInvariantReport
     out << "cells " << this->NumberOfCells << ", points " << this->NumberOfPoints
         << ", boundary facets " << this->BoundaryFacets << ", facets shared by >2 cells "
         << this->OvershareFacets << ", non-positive cells " << this->NonPositiveCells
-        << ", open boundary ridges " << this->OpenRidges << ", hanging nodes "
-        << this->HangingNodes << ", unreferenced points " << this->UnreferencedPoints
-        << ", invalid point ids " << this->InvalidPointIds << ", total volume "
-        << this->TotalVolume;
+        << ", open boundary ridges " << this->OpenRidges << ", hanging nodes " << this->HangingNodes
+        << ", unreferenced points " << this->UnreferencedPoints << ", invalid point ids "
+        << this->InvalidPointIds << ", total volume " << this->TotalVolume;
     return out.str();
   }
 };
@@ -356,7 +355,8 @@ MeshInvariantReport CheckSimplicialMesh(const std::vector<double>& points,
       return h;
     }
   };
-  auto quantize = [&](const double* x) {
+  auto quantize = [&](const double* x)
+  {
     std::array<std::int64_t, Dim> key;
     for (int axis = 0; axis < Dim; ++axis)
     {

@@ -19,7 +19,9 @@ constexpr int IntPow(int base, int exponent)
 
 constexpr int Binomial(int n, int k)
 {
-  return (k < 0 || k > n) ? 0 : (k == 0 || k == n) ? 1 : Binomial(n - 1, k - 1) + Binomial(n - 1, k);
+  return (k < 0 || k > n) ? 0
+    : (k == 0 || k == n)  ? 1
+                          : Binomial(n - 1, k - 1) + Binomial(n - 1, k);
 }
 
 constexpr int Factorial(int n)
@@ -68,7 +70,10 @@ struct CubeInfo
   /// Vertices of a Dim-simplex.
   static constexpr int VerticesPerSimplex = Dim + 1;
   /// Simplices of the checkerboard template (2 triangles, 5 tetrahedra); defined for Dim <= 3.
-  static constexpr int CheckerboardSimplicesPerCell = Dim == 1 ? 1 : Dim == 2 ? 2 : Dim == 3 ? 5 : 0;
+  static constexpr int CheckerboardSimplicesPerCell = Dim == 1 ? 1
+    : Dim == 2                                                 ? 2
+    : Dim == 3                                                 ? 5
+                                                               : 0;
 };
 
 /// Linear index of a lattice index inside a box of the given dimensions (axis 0 fastest).

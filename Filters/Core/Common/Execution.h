@@ -63,7 +63,8 @@ public:
   {
     const std::int64_t step = std::max<std::int64_t>(grain, 1);
     std::atomic<std::int64_t> next{ begin };
-    auto worker = [&]() {
+    auto worker = [&]()
+    {
       typename Kernel::Scratch scratch{};
       for (;;)
       {

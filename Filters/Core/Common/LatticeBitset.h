@@ -84,7 +84,10 @@ public:
     return total;
   }
 
-  std::int64_t GetNumberOfSetBits() const { return this->WordRank.empty() ? 0 : this->WordRank.back(); }
+  std::int64_t GetNumberOfSetBits() const
+  {
+    return this->WordRank.empty() ? 0 : this->WordRank.back();
+  }
 
   /// Number of set bits before this point in lattice order, i.e. the point's id.
   std::int64_t Rank(const LatticeIndex<Dim>& point) const

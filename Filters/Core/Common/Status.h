@@ -23,9 +23,15 @@ public:
 
   Status() = default;
   static Status Ok() { return Status(); }
-  static Status Invalid(std::string message) { return Status(Code::InvalidArgument, std::move(message)); }
+  static Status Invalid(std::string message)
+  {
+    return Status(Code::InvalidArgument, std::move(message));
+  }
   static Status Aborted() { return Status(Code::Aborted, "execution aborted"); }
-  static Status OutOfRange(std::string message) { return Status(Code::OutOfRange, std::move(message)); }
+  static Status OutOfRange(std::string message)
+  {
+    return Status(Code::OutOfRange, std::move(message));
+  }
 
   bool IsOk() const { return this->StatusCode == Code::Ok; }
   Code GetCode() const { return this->StatusCode; }

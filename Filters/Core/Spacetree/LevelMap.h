@@ -95,25 +95,29 @@ public:
   void Fill(const LatticeIndex<Dim>& anchor, int level, MaterialIndex material)
   {
     const std::int64_t size = this->CellSize(level);
-    this->ForEachRow(anchor, size, [&](std::int64_t rowStart) {
-      for (std::int64_t i = 0; i < size; ++i)
+    this->ForEachRow(anchor, size,
+      [&](std::int64_t rowStart)
       {
-        this->Levels[rowStart + i] = static_cast<std::uint8_t>(level);
-        this->Materials[rowStart + i] = material;
-      }
-    });
+        for (std::int64_t i = 0; i < size; ++i)
+        {
+          this->Levels[rowStart + i] = static_cast<std::uint8_t>(level);
+          this->Materials[rowStart + i] = material;
+        }
+      });
   }
 
   /// Splits the leaf (level, anchor) into its 2^Dim children; the children keep its material.
   void Split(const LatticeIndex<Dim>& anchor, int level)
   {
     const std::int64_t size = this->CellSize(level);
-    this->ForEachRow(anchor, size, [&](std::int64_t rowStart) {
-      for (std::int64_t i = 0; i < size; ++i)
+    this->ForEachRow(anchor, size,
+      [&](std::int64_t rowStart)
       {
-        this->Levels[rowStart + i] = static_cast<std::uint8_t>(level + 1);
-      }
-    });
+        for (std::int64_t i = 0; i < size; ++i)
+        {
+          this->Levels[rowStart + i] = static_cast<std::uint8_t>(level + 1);
+        }
+      });
   }
 
   /// Rebuilds the canonical leaf list of the tree from the map.

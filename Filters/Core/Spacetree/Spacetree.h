@@ -48,11 +48,17 @@ public:
   std::vector<LatticeIndex<Dim>> LeafAnchors;
   std::vector<MaterialIndex> LeafMaterials;
 
-  std::int64_t GetNumberOfLeaves() const { return static_cast<std::int64_t>(this->LeafLevels.size()); }
+  std::int64_t GetNumberOfLeaves() const
+  {
+    return static_cast<std::int64_t>(this->LeafLevels.size());
+  }
 
   std::int64_t GetRootCellSize() const { return std::int64_t{ 1 } << this->MaxLevel; }
 
-  std::int64_t GetCellSize(int level) const { return std::int64_t{ 1 } << (this->MaxLevel - level); }
+  std::int64_t GetCellSize(int level) const
+  {
+    return std::int64_t{ 1 } << (this->MaxLevel - level);
+  }
 
   /// Lattice cells per axis covered by the root grid.
   LatticeIndex<Dim> GetLatticeDimensions() const

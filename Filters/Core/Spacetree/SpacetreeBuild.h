@@ -66,8 +66,8 @@ public:
     }
     if (options.MaxCellSize < 1)
     {
-      return Status::Invalid("MaxCellSize must be at least 1 voxel, got " +
-        std::to_string(options.MaxCellSize));
+      return Status::Invalid(
+        "MaxCellSize must be at least 1 voxel, got " + std::to_string(options.MaxCellSize));
     }
     if (materialLabels.empty())
     {
@@ -144,7 +144,8 @@ public:
         return BackgroundMaterial; // entirely padding
       }
     }
-    const MaterialIndex first = clipped ? BackgroundMaterial : image.Values[LinearIndex<Dim>(anchor, image.Dimensions)];
+    const MaterialIndex first =
+      clipped ? BackgroundMaterial : image.Values[LinearIndex<Dim>(anchor, image.Dimensions)];
     const std::int64_t rowLength = end[0] - anchor[0];
     LatticeIndex<Dim> row = anchor;
     for (;;)
@@ -195,7 +196,8 @@ private:
         std::int64_t rest = root;
         for (int axis = 0; axis < Dim; ++axis)
         {
-          anchor[axis] = (rest % this->Tree->RootGridDimensions[axis]) * this->Tree->GetRootCellSize();
+          anchor[axis] =
+            (rest % this->Tree->RootGridDimensions[axis]) * this->Tree->GetRootCellSize();
           rest /= this->Tree->RootGridDimensions[axis];
         }
         this->Refine(anchor, 0, (*this->PerRoot)[root]);

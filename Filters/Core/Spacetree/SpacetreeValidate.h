@@ -63,7 +63,8 @@ Status ValidateSpacetree(const Spacetree<Dim>& tree)
     {
       if (anchor[axis] < 0 || anchor[axis] % size != 0 || anchor[axis] + size > dims[axis])
       {
-        return Status::Invalid("leaf " + std::to_string(leaf) + " lies outside the root grid or off its level's lattice");
+        return Status::Invalid("leaf " + std::to_string(leaf) +
+          " lies outside the root grid or off its level's lattice");
       }
     }
     std::int64_t rows = 1;

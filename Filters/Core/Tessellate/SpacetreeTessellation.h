@@ -139,8 +139,8 @@ public:
 
   /// Counts the simplices of every selected leaf and numbers the points they use.
   template <class Executor>
-  Status Prepare(const Spacetree<Dim>& tree, const SpacetreeTessellationOptions& options,
-    Executor& executor)
+  Status Prepare(
+    const Spacetree<Dim>& tree, const SpacetreeTessellationOptions& options, Executor& executor)
   {
     if (options.Template == CellTemplate::Checkerboard && Dim > 3)
     {
@@ -220,13 +220,16 @@ public:
   /// The leaf as a Dim-face.
   Face LeafFace(std::int64_t leaf) const
   {
-    return Face{ this->Tree->LeafAnchors[leaf], this->Tree->GetCellSize(this->Tree->LeafLevels[leaf]),
-      (1u << Dim) - 1u };
+    return Face{ this->Tree->LeafAnchors[leaf],
+      this->Tree->GetCellSize(this->Tree->LeafLevels[leaf]), (1u << Dim) - 1u };
   }
 
   /// Whether a leaf has no spacetree vertex on its boundary besides its corners; its simplices
   /// are then RegularCellSimplices(leaf) over its corners.
-  bool IsRegularLeaf(std::int64_t leaf) const { return this->IsBoundaryRegular(this->LeafFace(leaf)); }
+  bool IsRegularLeaf(std::int64_t leaf) const
+  {
+    return this->IsBoundaryRegular(this->LeafFace(leaf));
+  }
 
   /// Corner codes (bit i: far side along axis i), Dim+1 per simplex, positively oriented, of the
   /// template of a regular leaf.

@@ -41,9 +41,8 @@ public:
   explicit ErrorRecorder(vtkObject* object)
   {
     this->Callback->SetClientData(this);
-    this->Callback->SetCallback([](vtkObject*, unsigned long, void* self, void* message) {
-      static_cast<ErrorRecorder*>(self)->Messages += static_cast<const char*>(message);
-    });
+    this->Callback->SetCallback([](vtkObject*, unsigned long, void* self, void* message)
+      { static_cast<ErrorRecorder*>(self)->Messages += static_cast<const char*>(message); });
     object->AddObserver(vtkCommand::ErrorEvent, this->Callback);
   }
   std::string Messages;
@@ -62,7 +61,8 @@ int MaxNeighbourLevelDifference(vtkUnstructuredGrid* tree, bool facetsOnly)
   int dims[3] = { 1, 1, 1 };
   for (int a = 0; a < dim; ++a)
   {
-    dims[a] = static_cast<int>(fd->GetArray("SpacetreeRootGridDimensions")->GetComponent(a, 0)) << maxLevel;
+    dims[a] = static_cast<int>(fd->GetArray("SpacetreeRootGridDimensions")->GetComponent(a, 0))
+      << maxLevel;
   }
   std::vector<int> level(static_cast<std::size_t>(dims[0]) * dims[1] * dims[2], -1);
   vtkDataArray* levels = tree->GetCellData()->GetArray("Level");
@@ -119,7 +119,8 @@ double VoxelBoundaryMeasure(vtkImageData* image, int dim, const double spacing[3
   int dims[3];
   image->GetDimensions(dims);
   vtkDataArray* labels = image->GetPointData()->GetScalars();
-  auto body = [&](int i, int j, int k) {
+  auto body = [&](int i, int j, int k)
+  {
     if (i < 0 || j < 0 || k < 0 || i >= dims[0] || j >= dims[1] || k >= dims[2])
     {
       return false;
@@ -164,8 +165,8 @@ TEST_P(SyntheticPipeline, ValidExactMesh)
   const int dims[3] = { 37, 29, c.Dimension == 3 ? 23 : 1 };
   const double spacing[3] = { 0.5, 0.75, 1.25 };
   const double origin[3] = { -3.0, 2.0, 7.5 };
-  auto image = stmTest::MakeLabelImage(
-    dims, spacing, origin, [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
+  auto image = stmTest::MakeLabelImage(dims, spacing, origin,
+    [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
   stmTest::Pipeline pipeline;
   vtkUnstructuredGrid* mesh = pipeline.Run(image, c.BalanceLevel, c.CellTemplate);
 
@@ -193,7 +194,8 @@ TEST_P(SyntheticPipeline, ValidExactMesh)
   EXPECT_EQ(meshLabels, (std::set<long long>{ 1, 2, 5 }));
   for (long long label : { 1, 2, 5 })
   {
-    EXPECT_NEAR(report.VolumePerMaterial.at(label), counts.at(label) * voxel, 1e-9 * counts.at(label))
+    EXPECT_NEAR(
+      report.VolumePerMaterial.at(label), counts.at(label) * voxel, 1e-9 * counts.at(label))
       << "label " << label;
   }
   EXPECT_NEAR(report.BoundaryMeasure, VoxelBoundaryMeasure(image, c.Dimension, spacing), 1e-7);
@@ -239,7 +241,8 @@ INSTANTIATE_TEST_SUITE_P(DimensionsAndBalance, SyntheticPipeline,
   ::testing::Values(Case{ 2, 0, 0 }, Case{ 2, 1, 0 }, Case{ 2, 2, 0 }, Case{ 2, 3, 0 },
     Case{ 2, 1, 1 }, Case{ 3, 0, 0 }, Case{ 3, 1, 0 }, Case{ 3, 2, 0 }, Case{ 3, 3, 0 },
     Case{ 3, 1, 1 }, Case{ 3, 3, 1 }),
-  [](const ::testing::TestParamInfo<Case>& info) {
+  [](const ::testing::TestParamInfo<Case>& info)
+  {
     return std::to_string(info.param.Dimension) + "D_L" + std::to_string(info.param.BalanceLevel) +
       (info.param.CellTemplate == 0 ? "_Checkerboard" : "_Kuhn");
   });
@@ -256,8 +259,8 @@ TEST_P(SyntheticPipeline, QualityWithinObservedBounds)
   }
   const int dims[3] = { 45, 38, c.Dimension == 3 ? 31 : 1 };
   const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
-  auto image = stmTest::MakeLabelImage(
-    dims, spacing, origin, [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
+  auto image = stmTest::MakeLabelImage(dims, spacing, origin,
+    [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
   stmTest::Pipeline pipeline;
   vtkUnstructuredGrid* mesh = pipeline.Run(image, c.BalanceLevel, c.CellTemplate);
 
@@ -277,8 +280,10 @@ TEST_P(SyntheticPipeline, QualityWithinObservedBounds)
   condition->SetTetQualityMeasureToCondition();
   condition->SetTriangleQualityMeasureToCondition();
   condition->Update();
-  const double worst =
-    vtkDataSet::SafeDownCast(condition->GetOutput())->GetCellData()->GetArray("Quality")->GetRange()[1];
+  const double worst = vtkDataSet::SafeDownCast(condition->GetOutput())
+                         ->GetCellData()
+                         ->GetArray("Quality")
+                         ->GetRange()[1];
   vtkNew<vtkMeshQuality> angle;
   angle->SetInputData(mesh);
   angle->SetTetQualityMeasureToMinAngle();
@@ -299,8 +304,8 @@ TEST(SpacetreePipeline, BalanceOnlyRefinesAndKeepsMaterials)
 {
   const int dims[3] = { 40, 33, 26 };
   const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
-  auto image = stmTest::MakeLabelImage(
-    dims, spacing, origin, [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
+  auto image = stmTest::MakeLabelImage(dims, spacing, origin,
+    [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
   stmTest::Pipeline pipeline;
   pipeline.Run(image, 1);
   vtkUnstructuredGrid* before = pipeline.Tree->GetOutput();
@@ -309,12 +314,17 @@ TEST(SpacetreePipeline, BalanceOnlyRefinesAndKeepsMaterials)
   EXPECT_EQ(MaxNeighbourLevelDifference(after, false), 1);
   // Each leaf after balancing lies inside one leaf before, with the same material and a level
   // at least as fine.
-  auto rasterise = [](vtkUnstructuredGrid* tree, std::vector<int>& level, std::vector<int>& material) {
-    const int maxLevel = static_cast<int>(tree->GetFieldData()->GetArray("SpacetreeMaxLevel")->GetComponent(0, 0));
+  auto rasterise = [](
+                     vtkUnstructuredGrid* tree, std::vector<int>& level, std::vector<int>& material)
+  {
+    const int maxLevel =
+      static_cast<int>(tree->GetFieldData()->GetArray("SpacetreeMaxLevel")->GetComponent(0, 0));
     int n[3];
     for (int a = 0; a < 3; ++a)
     {
-      n[a] = static_cast<int>(tree->GetFieldData()->GetArray("SpacetreeRootGridDimensions")->GetComponent(a, 0)) << maxLevel;
+      n[a] = static_cast<int>(
+               tree->GetFieldData()->GetArray("SpacetreeRootGridDimensions")->GetComponent(a, 0))
+        << maxLevel;
     }
     level.assign(static_cast<std::size_t>(n[0]) * n[1] * n[2], -1);
     material.assign(level.size(), -1);
@@ -326,7 +336,9 @@ TEST(SpacetreePipeline, BalanceOnlyRefinesAndKeepsMaterials)
       int lo[3];
       for (int a = 0; a < 3; ++a)
       {
-        lo[a] = static_cast<int>(tree->GetCellData()->GetArray("LatticeIndex")->GetComponent(c, a)) * size;
+        lo[a] =
+          static_cast<int>(tree->GetCellData()->GetArray("LatticeIndex")->GetComponent(c, a)) *
+          size;
       }
       for (int k = lo[2]; k < lo[2] + size; ++k)
         for (int j = lo[1]; j < lo[1] + size; ++j)
@@ -353,8 +365,8 @@ TEST(SpacetreePipeline, FaceBalanceOnly)
 {
   const int dims[3] = { 40, 33, 26 };
   const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
-  auto image = stmTest::MakeLabelImage(
-    dims, spacing, origin, [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
+  auto image = stmTest::MakeLabelImage(dims, spacing, origin,
+    [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
   stmTest::Pipeline pipeline;
   pipeline.Balance->FaceBalanceOnlyOn();
   vtkUnstructuredGrid* mesh = pipeline.Run(image, 1);
@@ -367,8 +379,8 @@ TEST(SpacetreePipeline, MirroringDirectionMatrixKeepsPositiveVolumes)
 {
   const int dims[3] = { 20, 18, 16 };
   const double spacing[3] = { 1, 2, 3 }, origin[3] = { 5, 5, 5 };
-  auto image = stmTest::MakeLabelImage(
-    dims, spacing, origin, [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
+  auto image = stmTest::MakeLabelImage(dims, spacing, origin,
+    [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
   const double flipX[9] = { -1, 0, 0, 0, 1, 0, 0, 0, 1 };
   image->SetDirectionMatrix(flipX);
   stmTest::Pipeline pipeline;
@@ -385,8 +397,8 @@ TEST(SpacetreePipeline, CellDataLabelsGiveTheSameMesh)
 {
   const int dims[3] = { 21, 17, 13 };
   const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
-  auto pointImage = stmTest::MakeLabelImage(
-    dims, spacing, origin, [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
+  auto pointImage = stmTest::MakeLabelImage(dims, spacing, origin,
+    [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
   vtkNew<vtkImageData> cellImage;
   cellImage->SetDimensions(dims[0] + 1, dims[1] + 1, dims[2] + 1);
   cellImage->SetOrigin(-0.5, -0.5, -0.5);
@@ -412,8 +424,8 @@ TEST(SpacetreePipeline, OutputDoesNotDependOnThreadCount)
 {
   const int dims[3] = { 48, 40, 36 };
   const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
-  auto image = stmTest::MakeLabelImage(
-    dims, spacing, origin, [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
+  auto image = stmTest::MakeLabelImage(dims, spacing, origin,
+    [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
   const std::string previousBackend = vtkSMPTools::GetBackend();
   ASSERT_TRUE(vtkSMPTools::SetBackend("STDThread"));
   std::vector<std::vector<double>> coordinates;
@@ -450,8 +462,8 @@ TEST(SpacetreePipeline, SpacetreeAndMeshFileRoundTrip)
 {
   const int dims[3] = { 30, 26, 22 };
   const double spacing[3] = { 0.5, 0.5, 1.0 }, origin[3] = { 1, 2, 3 };
-  auto image = stmTest::MakeLabelImage(
-    dims, spacing, origin, [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
+  auto image = stmTest::MakeLabelImage(dims, spacing, origin,
+    [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims); });
   stmTest::Pipeline pipeline;
   vtkUnstructuredGrid* direct = pipeline.Run(image, 2);
 
@@ -516,7 +528,8 @@ TEST(SpacetreePipeline, BadInputGetsClearErrors)
 {
   const int dims[3] = { 10, 10, 10 };
   const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
-  auto check = [](vtkAlgorithm* algorithm, const std::string& expected) {
+  auto check = [](vtkAlgorithm* algorithm, const std::string& expected)
+  {
     ErrorRecorder errors(algorithm);
     algorithm->Update();
     EXPECT_NE(errors.Messages.find(expected), std::string::npos)
@@ -551,7 +564,8 @@ TEST(SpacetreePipeline, BadInputGetsClearErrors)
   { // negative and zero spacing
     for (double bad : { 0.0, -1.0 })
     {
-      auto image = stmTest::MakeLabelImage(dims, spacing, origin, [](int i, int, int) { return i > 4; });
+      auto image =
+        stmTest::MakeLabelImage(dims, spacing, origin, [](int i, int, int) { return i > 4; });
       image->SetSpacing(1, bad, 1);
       vtkNew<stmImageToSpacetree> tree;
       tree->SetInputData(image);
@@ -565,7 +579,8 @@ TEST(SpacetreePipeline, BadInputGetsClearErrors)
     check(tree, "body of interest is empty");
   }
   { // a label absent from the image, and the background as a body label
-    auto image = stmTest::MakeLabelImage(dims, spacing, origin, [](int i, int, int) { return i > 4; });
+    auto image =
+      stmTest::MakeLabelImage(dims, spacing, origin, [](int i, int, int) { return i > 4; });
     vtkNew<stmImageToSpacetree> tree;
     tree->SetInputData(image);
     tree->AddBodyLabel(7);
@@ -584,14 +599,16 @@ TEST(SpacetreePipeline, BadInputGetsClearErrors)
     check(tessellate, "SpacetreeDimension");
   }
   { // a corrupted spacetree: one leaf's level changed, so the leaves overlap
-    auto image = stmTest::MakeLabelImage(dims, spacing, origin, [](int i, int j, int) { return i > 4 && j > 3; });
+    auto image = stmTest::MakeLabelImage(
+      dims, spacing, origin, [](int i, int j, int) { return i > 4 && j > 3; });
     vtkNew<stmImageToSpacetree> tree;
     tree->SetInputData(image);
     tree->Update();
     vtkNew<vtkUnstructuredGrid> corrupt;
     corrupt->DeepCopy(tree->GetOutput());
     auto* levels = vtkUnsignedCharArray::SafeDownCast(corrupt->GetCellData()->GetArray("Level"));
-    levels->SetValue(0, static_cast<unsigned char>(levels->GetValue(0) == 0 ? 1 : levels->GetValue(0) - 1));
+    levels->SetValue(
+      0, static_cast<unsigned char>(levels->GetValue(0) == 0 ? 1 : levels->GetValue(0) - 1));
     vtkNew<stmSpacetreeTessellate> tessellate;
     tessellate->SetInputData(corrupt);
     check(tessellate, "invalid spacetree");
@@ -663,8 +680,7 @@ TEST_P(AalAtlas, ValidExactMesh)
 }
 
 INSTANTIATE_TEST_SUITE_P(BalanceLevels, AalAtlas, ::testing::Values(0, 1, 2, 3),
-  [](const ::testing::TestParamInfo<int>& info) {
-    return info.param == 0 ? std::string("Unbalanced") : "L" + std::to_string(info.param);
-  });
+  [](const ::testing::TestParamInfo<int>& info)
+  { return info.param == 0 ? std::string("Unbalanced") : "L" + std::to_string(info.param); });
 
 } // namespace
