@@ -7,6 +7,7 @@
 #include "Spacetree/SpacetreeBuild.h"
 
 #include "vtkArrayDispatch.h"
+#include "vtkCellData.h"
 #include "vtkDataArrayRange.h"
 #include "vtkDataObject.h"
 #include "vtkDataSetAttributes.h"
@@ -15,6 +16,7 @@
 #include "vtkInformationVector.h"
 #include "vtkMatrix3x3.h"
 #include "vtkObjectFactory.h"
+#include "vtkPointData.h"
 #include "vtkSMPTools.h"
 #include "vtkUnstructuredGrid.h"
 
@@ -276,6 +278,27 @@ int stmImageToSpacetree::RequestData(
   // The label array.
   int association = -1;
   vtkDataArray* labels = this->GetInputArrayToProcess(0, inputVector, association);
+  vtkInformation* selection = this->GetInputArrayInformation(0);
+  const char* selectedName = selection->Has(vtkDataObject::FIELD_NAME())
+    ? selection->Get(vtkDataObject::FIELD_NAME())
+    : nullptr;
+  if (!labels && selectedName && *selectedName)
+  {
+    vtkErrorMacro("The image has no array named \"" << selectedName << "\".");
+    return 0;
+  }
+  if (!labels)
+  {
+    // An empty array selection, as when ParaView sets the property before the image has
+    // arrays: fall back to the active scalars, point data first.
+    labels = input->GetPointData()->GetScalars();
+    association = vtkDataObject::FIELD_ASSOCIATION_POINTS;
+    if (!labels)
+    {
+      labels = input->GetCellData()->GetScalars();
+      association = vtkDataObject::FIELD_ASSOCIATION_CELLS;
+    }
+  }
   if (!labels)
   {
     vtkErrorMacro("No label array: select an integer point or cell array of the image.");

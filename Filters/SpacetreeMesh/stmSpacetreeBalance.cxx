@@ -50,19 +50,21 @@ void stmSpacetreeBalance::PrintSelf(ostream& os, vtkIndent indent)
 int stmSpacetreeBalance::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0], 0);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
-  if (!input || !output)
-  {
-    vtkErrorMacro("SpacetreeBalance needs the vtkUnstructuredGrid output of ImageToSpacetree.");
-    return 0;
-  }
-  std::string error;
+  vtkUnstructuredGrid* input = nullptr;
   stmSpacetreeGeometry geometry;
-  if (!stmSpacetreeData::ReadGeometry(input->GetFieldData(), geometry, error))
+  std::string error;
+  switch (stmSpacetreeData::ReadInput(inputVector[0], input, geometry, error))
   {
-    vtkErrorMacro("SpacetreeBalance: " << error);
-    return 0;
+    case stmSpacetreeData::InputStatus::UpstreamAborted:
+      output->Initialize();
+      return 1;
+    case stmSpacetreeData::InputStatus::Invalid:
+      output->Initialize();
+      vtkErrorMacro("SpacetreeBalance: " << error);
+      return 0;
+    case stmSpacetreeData::InputStatus::Ready:
+      break;
   }
   stm::SpacetreeBalanceOptions options;
   options.BalanceLevel = this->BalanceLevel;

@@ -4,11 +4,14 @@
 #include "Common/LatticeBitset.h"
 #include "Spacetree/SpacetreeValidate.h"
 
+#include "vtkAlgorithm.h"
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
 #include "vtkIdTypeArray.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
 #include "vtkIntArray.h"
 #include "vtkNew.h"
 #include "vtkPoints.h"
@@ -112,6 +115,34 @@ bool GetDoubles(vtkFieldData* fd, const char* name, int count, double* values, s
 namespace stmSpacetreeData
 {
 
+InputStatus ReadInput(vtkInformationVector* inputPort, vtkUnstructuredGrid*& grid,
+  stmSpacetreeGeometry& geometry, std::string& error)
+{
+  vtkInformation* info = inputPort->GetInformationObject(0);
+  grid = vtkUnstructuredGrid::GetData(inputPort, 0);
+  if (info && info->Get(vtkAlgorithm::ABORTED()))
+  {
+    return InputStatus::UpstreamAborted;
+  }
+  if (!grid)
+  {
+    error = "the input must be the vtkUnstructuredGrid output of ImageToSpacetree";
+    return InputStatus::Invalid;
+  }
+  return ReadGeometry(grid->GetFieldData(), geometry, error) ? InputStatus::Ready
+                                                             : InputStatus::Invalid;
+}
+
+void RemoveSpacetreeFieldData(vtkFieldData* fieldData)
+{
+  for (const char* name : { DimensionName, ImageAxesName, RootGridName, MaxLevelName,
+         ImageDimensionsName, BackgroundLabelName, BodyLabelsName, BalanceLevelName,
+         FaceBalanceOnlyName, OriginName, AxisVectorsName })
+  {
+    fieldData->RemoveArray(name);
+  }
+}
+
 bool ReadGeometry(vtkFieldData* fd, stmSpacetreeGeometry& geometry, std::string& error)
 {
   std::vector<long long> ints;
@@ -147,6 +178,25 @@ bool ReadGeometry(vtkFieldData* fd, stmSpacetreeGeometry& geometry, std::string&
   for (int i = 0; i < 9; ++i)
   {
     geometry.AxisVectors[i / 3][i % 3] = axes[i];
+  }
+  // The spanned axes must be independent, or every element would be flat.
+  const double* u = geometry.AxisVectors[geometry.ImageAxes[0]];
+  const double* v = geometry.AxisVectors[geometry.ImageAxes[1]];
+  const double cross[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+    u[0] * v[1] - u[1] * v[0] };
+  double measure = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+  double scale = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) *
+    std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  if (geometry.Dimension == 3)
+  {
+    const double* w = geometry.AxisVectors[geometry.ImageAxes[2]];
+    measure = std::abs(cross[0] * w[0] + cross[1] * w[1] + cross[2] * w[2]);
+    scale *= std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+  }
+  if (!(measure > 1e-12 * scale) || !(scale > 0))
+  {
+    error = "the spacetree's lattice axes are degenerate (zero or parallel voxel edges)";
+    return false;
   }
   return true;
 }
@@ -253,6 +303,11 @@ bool ReadSpacetree(vtkUnstructuredGrid* input, stm::Spacetree<Dim>& tree, std::s
     return false;
   }
   tree.BalanceLevel = static_cast<int>(ints[0]);
+  if (tree.BalanceLevel != -1 && (tree.BalanceLevel < 1 || tree.BalanceLevel > 20))
+  {
+    error = "the spacetree's balance level must be -1 (unbalanced) or between 1 and 20";
+    return false;
+  }
   if (!GetInts(fd, FaceBalanceOnlyName, 1, ints, error))
   {
     return false;

@@ -17,6 +17,7 @@
 #include <string>
 
 class vtkFieldData;
+class vtkInformationVector;
 class vtkUnstructuredGrid;
 
 /// Where the spacetree lattice sits in physical space.
@@ -51,6 +52,22 @@ struct stmSpacetreeGeometry
 
 namespace stmSpacetreeData
 {
+/// What a filter that consumes a spacetree finds on its input port.
+enum class InputStatus
+{
+  Ready,
+  /// An upstream filter was aborted: produce an empty output quietly.
+  UpstreamAborted,
+  Invalid
+};
+
+/// The grid on the input port and its geometry; Invalid comes with a message.
+InputStatus ReadInput(vtkInformationVector* inputPort, vtkUnstructuredGrid*& grid,
+  stmSpacetreeGeometry& geometry, std::string& error);
+
+/// Removes the spacetree's field arrays (a mesh is not a spacetree).
+void RemoveSpacetreeFieldData(vtkFieldData* fieldData);
+
 /// Reads the geometry (and so the dimension) from the field data of a spacetree dataset.
 bool ReadGeometry(vtkFieldData* fieldData, stmSpacetreeGeometry& geometry, std::string& error);
 

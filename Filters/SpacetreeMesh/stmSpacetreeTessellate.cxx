@@ -175,20 +175,21 @@ void stmSpacetreeTessellate::PrintSelf(ostream& os, vtkIndent indent)
 int stmSpacetreeTessellate::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0], 0);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
-  if (!input || !output)
-  {
-    vtkErrorMacro("SpacetreeTessellate needs the vtkUnstructuredGrid output of ImageToSpacetree "
-                  "or SpacetreeBalance.");
-    return 0;
-  }
-  std::string error;
+  vtkUnstructuredGrid* input = nullptr;
   stmSpacetreeGeometry geometry;
-  if (!stmSpacetreeData::ReadGeometry(input->GetFieldData(), geometry, error))
+  std::string error;
+  switch (stmSpacetreeData::ReadInput(inputVector[0], input, geometry, error))
   {
-    vtkErrorMacro("SpacetreeTessellate: " << error);
-    return 0;
+    case stmSpacetreeData::InputStatus::UpstreamAborted:
+      output->Initialize();
+      return 1;
+    case stmSpacetreeData::InputStatus::Invalid:
+      output->Initialize();
+      vtkErrorMacro("SpacetreeTessellate: " << error);
+      return 0;
+    case stmSpacetreeData::InputStatus::Ready:
+      break;
   }
   stm::SpacetreeTessellationOptions options;
   options.Template =
@@ -208,6 +209,8 @@ int stmSpacetreeTessellate::RequestData(
     vtkErrorMacro("SpacetreeTessellate failed: " << error);
     return 0;
   }
+  // The executive passes the input's field data on; the spacetree's do not describe a mesh.
+  stmSpacetreeData::RemoveSpacetreeFieldData(output->GetFieldData());
   this->UpdateProgress(1.0);
   return 1;
 }

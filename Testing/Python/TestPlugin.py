@@ -1,0 +1,232 @@
+"""The SpacetreeMesh ParaView plugin through paraview.simple (run by both pvpython and pvbatch).
+
+- LoadPlugin puts the three filters into paraview.simple; OpenDataFile picks the plugin's NIfTI
+  reader for aal.nii.gz and reads 181 x 217 x 181 voxels.
+- The default pipeline ImageToSpacetree -> SpacetreeBalance -> SpacetreeTessellate gives only
+  tetrahedra whose Material values are exactly the non-zero AAL labels, each material's volume
+  equal to its voxel count (1 mm^3 voxels).
+- SaveData as an inline-binary .vtu (DataMode='Binary', not ParaView's default 'Appended') and
+  reading it back: under pvpython the mesh comes back identical; under pvbatch the balanced
+  spacetree comes back identical and tessellates to the same mesh.
+- A 2D label image made in memory (PVTrivialProducer) gives a conforming triangle mesh whose
+  area per label equals the pixel count exactly.
+"""
+import os
+
+import numpy as np
+
+from paraview.modules.vtkRemotingCore import vtkProcessModule
+from paraview.simple import (
+    Delete,
+    LoadPlugin,
+    OpenDataFile,
+    PVTrivialProducer,
+    SaveData,
+)
+
+import stmtesting as T
+from vtkmodules.vtkCommonDataModel import VTK_TETRA, VTK_TRIANGLE
+
+PLUGIN = T.env("STM_PLUGIN")
+AAL = T.env("STM_AAL")
+DRIVER = T.env("STM_DRIVER")
+
+# pvbatch runs in batch mode, pvpython as a client with a builtin server.
+BATCH = vtkProcessModule.GetProcessType() == vtkProcessModule.PROCESS_BATCH
+T.check_equal(BATCH, DRIVER == "pvbatch", "batch mode under %s" % DRIVER)
+
+
+def vtk_output(proxy):
+    """The VTK output of a proxy (builtin session: the server is this process)."""
+    proxy.UpdatePipeline()
+    return proxy.GetClientSideObject().GetOutputDataObject(0)
+
+
+# --- the plugin ---------------------------------------------------------------------------------
+LoadPlugin(PLUGIN, ns=globals())
+for function in ("ImageToSpacetree", "SpacetreeBalance", "SpacetreeTessellate"):
+    T.check(callable(globals().get(function)), "LoadPlugin(ns=globals()) did not define %s"
+            % function)
+
+# --- the reader ---------------------------------------------------------------------------------
+reader = OpenDataFile(AAL)
+T.check(reader is not None, "OpenDataFile found no reader for %s" % AAL)
+T.check_equal(reader.GetXMLName(), "stmNIFTIReader", "reader chosen by OpenDataFile")
+T.check_equal(reader.GetXMLGroup(), "sources", "reader proxy group")
+reader.UpdatePipeline()
+info = reader.GetDataInformation()
+T.check_equal(info.GetDataSetTypeAsString(), "vtkImageData", "reader output type")
+T.check_equal(tuple(info.GetExtent()), (0, 180, 0, 216, 0, 180), "reader extent")
+image = vtk_output(reader)
+T.check_equal(image.GetDimensions(), (181, 217, 181), "image dimensions")
+T.check_equal(image.GetSpacing(), (1.0, 1.0, 1.0), "image spacing")
+labels = T.image_labels(image)
+T.check_equal(len(labels), 181 * 217 * 181, "number of voxels")
+counts = T.voxel_counts(labels, background=0)
+body = sorted(counts)
+# The AAL atlas: labels 1 to 116 around background 0.
+T.check_equal((len(body), body[0], body[-1]), (116, 1, 116), "AAL labels (count, first, last)")
+voxel_volume = float(np.prod(image.GetSpacing()))
+
+# --- the default pipeline -----------------------------------------------------------------------
+tree = ImageToSpacetree(Input=reader)
+# The label array domain picked the reader's scalars (needs the reader updated first).
+T.check_equal(list(tree.LabelArray), ["POINTS", image.GetPointData().GetScalars().GetName()],
+              "default LabelArray")
+balance = SpacetreeBalance(Input=tree)
+mesh = SpacetreeTessellate(Input=balance)
+mesh.UpdatePipeline()
+
+tree_data = vtk_output(tree)
+balanced_data = vtk_output(balance)
+T.check(T.is_hexahedral_spacetree(tree_data), "ImageToSpacetree output is not all hexahedra")
+T.check(T.is_hexahedral_spacetree(balanced_data), "SpacetreeBalance output is not all hexahedra")
+T.check(balanced_data.GetNumberOfCells() >= tree_data.GetNumberOfCells(),
+        "balancing removed leaves: %d -> %d"
+        % (tree_data.GetNumberOfCells(), balanced_data.GetNumberOfCells()))
+for name in ("Level", "Material", "LatticeIndex"):
+    T.cell_array(tree_data, name)
+T.check(tree_data.GetFieldData().GetArray("SpacetreeDimension") is not None,
+        "the spacetree lacks its field data")
+
+mesh_info = mesh.GetDataInformation()
+T.check_equal(mesh_info.GetDataSetTypeAsString(), "vtkUnstructuredGrid", "mesh type (proxy)")
+mesh_data = vtk_output(mesh)
+T.check_equal(mesh_data.GetClassName(), "vtkUnstructuredGrid", "mesh class")
+cells = mesh_data.GetNumberOfCells()
+T.check(cells > 0, "the mesh is empty")
+T.check_equal(mesh_info.GetNumberOfCells(), cells, "cell count (data information vs data)")
+types = T.cell_types(mesh_data)
+T.check(bool(np.all(types == VTK_TETRA)),
+        "the mesh holds cell types other than tetrahedra: %s" % sorted(set(types.tolist())))
+
+material = T.cell_array(mesh_data, "Material")
+T.check_equal(mesh.CellData["Material"].GetRange(), (float(body[0]), float(body[-1])),
+              "Material range (proxy data information)")
+T.check_equal((int(material.min()), int(material.max())), (body[0], body[-1]), "Material range")
+T.check_equal(T.distinct(material), body, "set of Material values")
+T.check_measures(mesh_data, counts, voxel_volume, 1e-6, "AAL volume per material")
+
+# --- save as inline binary .vtu and read back ---------------------------------------------------
+# DataMode="Binary" (the XML writer proxy's DataMode: Ascii, Binary, Appended) writes the arrays
+# base64-encoded inside their DataArray elements. ParaView's default, Appended, puts raw bytes
+# after the XML, which some expat versions (Debian 12 security updates) refuse on reading.
+# To stay within the time budget, pvpython saves the mesh (LZ4-compressed, 4.6 M tetrahedra) and
+# pvbatch saves the balanced spacetree, read back and tessellated again.
+
+
+def check_inline_binary(path):
+    with open(path, "rb") as stream:
+        content = stream.read()
+    T.check(len(content) > 0, "SaveData wrote nothing to %s" % path)
+    T.check(b"<AppendedData" not in content, "%s is in appended mode" % path)
+    T.check(b'format="appended"' not in content, "%s has appended arrays" % path)
+    T.check(b'format="binary"' in content, "%s has no inline binary arrays" % path)
+
+
+if not BATCH:
+    vtu = T.temp_path("aal_mesh.vtu")
+    if os.path.exists(vtu):
+        os.remove(vtu)
+    SaveData(vtu, proxy=mesh, DataMode="Binary", CompressorType="LZ4")
+    check_inline_binary(vtu)
+    copy = OpenDataFile(vtu)
+    T.check(copy is not None, "OpenDataFile found no reader for %s" % vtu)
+    T.check_equal(copy.GetXMLName(), "XMLUnstructuredGridReader", "reader of the .vtu")
+    copy_data = vtk_output(copy)
+    T.check_equal(copy_data.GetNumberOfCells(), cells, "cells read back")
+    T.check_equal(copy_data.GetNumberOfPoints(), mesh_data.GetNumberOfPoints(), "points read back")
+    T.check(bool(np.all(T.cell_types(copy_data) == VTK_TETRA)), "cell types read back differ")
+    T.check(bool(np.array_equal(T.cell_array(copy_data, "Material"), material)),
+            "Material values read back differ")
+    T.check(bool(np.array_equal(T.points(copy_data), T.points(mesh_data))),
+            "points read back differ")
+    T.check(bool(np.array_equal(T.connectivity(copy_data, 4), T.connectivity(mesh_data, 4))),
+            "connectivity read back differs")
+    Delete(copy)
+    del copy_data
+    os.remove(vtu)
+else:
+    # A spacetree saved and read back rebuilds the same tree: its tessellation is the same mesh.
+    tree_vtu = T.temp_path("aal_spacetree.vtu")
+    if os.path.exists(tree_vtu):
+        os.remove(tree_vtu)
+    SaveData(tree_vtu, proxy=balance, DataMode="Binary")
+    check_inline_binary(tree_vtu)
+    saved_tree = OpenDataFile(tree_vtu)
+    T.check(saved_tree is not None, "OpenDataFile found no reader for %s" % tree_vtu)
+    T.check_equal(saved_tree.GetXMLName(), "XMLUnstructuredGridReader", "reader of the spacetree")
+    saved_tree_data = vtk_output(saved_tree)
+    T.check_equal(saved_tree_data.GetNumberOfCells(), balanced_data.GetNumberOfCells(),
+                  "leaves read back")
+    T.check_equal(saved_tree_data.GetNumberOfPoints(), balanced_data.GetNumberOfPoints(),
+                  "spacetree points read back")
+    for name in ("Level", "Material", "LatticeIndex"):
+        T.check(bool(np.array_equal(T.cell_array(saved_tree_data, name),
+                                    T.cell_array(balanced_data, name))),
+                "spacetree cell array %s read back differs" % name)
+    mesh_of_saved = SpacetreeTessellate(Input=saved_tree)
+    mesh_of_saved_data = vtk_output(mesh_of_saved)
+    T.check_equal(mesh_of_saved_data.GetNumberOfCells(), cells,
+                  "cells of the saved spacetree's mesh")
+    T.check(bool(np.array_equal(T.cell_array(mesh_of_saved_data, "Material"), material)),
+            "the saved spacetree's mesh has other Material values")
+    T.check(bool(np.array_equal(T.connectivity(mesh_of_saved_data, 4),
+                                T.connectivity(mesh_data, 4))),
+            "the saved spacetree's mesh has another connectivity")
+    Delete(mesh_of_saved)
+    Delete(saved_tree)
+    del saved_tree_data, mesh_of_saved_data
+    os.remove(tree_vtu)
+del mesh_data, tree_data, balanced_data
+for proxy in (mesh, balance, tree, reader):
+    Delete(proxy)
+
+# --- 2D: a disc and a square in a 64 x 48 image --------------------------------------------------
+DISC, SQUARE = 3, 7
+y, x = np.mgrid[0:48, 0:64]
+pixels = np.zeros((1, 48, 64), dtype=np.int16)
+pixels[0][(x - 20) ** 2 + (y - 24) ** 2 <= 12 ** 2] = DISC
+pixels[0][(x >= 40) & (x <= 55) & (y >= 10) & (y <= 30)] = SQUARE
+image2d = T.make_image(pixels, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0), name="labels2d")
+counts2d = T.voxel_counts(pixels.ravel())
+T.check_equal(sorted(counts2d), [DISC, SQUARE], "2D labels")
+
+producer = PVTrivialProducer()
+producer.GetClientSideObject().SetOutput(image2d)
+producer.UpdatePipeline()
+T.check_equal(tuple(producer.GetDataInformation().GetExtent()), (0, 63, 0, 47, 0, 0), "2D extent")
+tree2d = ImageToSpacetree(Input=producer)
+mesh2d = SpacetreeTessellate(Input=SpacetreeBalance(Input=tree2d))
+mesh2d_data = vtk_output(mesh2d)
+T.check(T.is_hexahedral_spacetree(vtk_output(tree2d), dimension=2),
+        "2D spacetree is not all quads")
+types2d = T.cell_types(mesh2d_data)
+T.check(len(types2d) > 0 and bool(np.all(types2d == VTK_TRIANGLE)),
+        "the 2D mesh is not all triangles: %s" % sorted(set(types2d.tolist())))
+T.check_equal(float(np.abs(T.points(mesh2d_data)[:, 2]).max()), 0.0, "2D mesh z coordinates")
+jj, ii = np.nonzero(pixels[0])
+T.check_equal(mesh2d_data.GetBounds(),
+              (ii.min() - 0.5, ii.max() + 0.5, jj.min() - 0.5, jj.max() + 0.5, 0.0, 0.0),
+              "2D mesh bounds")
+xyz2d = T.points(mesh2d_data)
+material2d = T.cell_array(mesh2d_data, "Material")
+# Pixel (i, j) covers [i - 0.5, i + 0.5] x [j - 0.5, j + 0.5]: the mesh spans the labelled pixels.
+for label in (DISC, SQUARE):
+    jj, ii = np.nonzero(pixels[0] == label)
+    conn = T.connectivity(mesh2d_data, 3)[material2d == label]
+    used = xyz2d[np.unique(conn)]
+    T.check_equal((used[:, 0].min(), used[:, 0].max(), used[:, 1].min(), used[:, 1].max()),
+                  (ii.min() - 0.5, ii.max() + 0.5, jj.min() - 0.5, jj.max() + 0.5),
+                  "2D bounds of label %d" % label)
+T.check_measures(mesh2d_data, counts2d, 1.0, 0.0, "2D area per label", exact=True)
+perimeter, most = T.boundary_measure(mesh2d_data)
+T.check_equal(perimeter, T.voxel_boundary_measure(pixels > 0, (1.0, 1.0, 1.0)),
+              "2D boundary length (conformity)")
+T.check(most <= 2, "2D: an edge is shared by %d triangles" % most)
+vtk_areas = T.per_material(T.vtk_measures(mesh2d_data), material2d)
+for label, count in counts2d.items():
+    T.check_close(vtk_areas[label], float(count), 1e-12, "2D vtkCellSizeFilter area of label %d" % label)
+
+print("%s: plugin test passed (%d tetrahedra, %d triangles)"
+      % (DRIVER, cells, mesh2d_data.GetNumberOfCells()))
