@@ -1,0 +1,48 @@
+"""The plugin in the real ParaView GUI (run under Xvfb by RunGUITest.sh): the NIfTI reader and the
+three filters run through the GUI's Python, the mesh is right, and a screenshot shows it.
+
+ParaView's --script exits 0 even when the script raises, so success is reported by writing the
+marker file named by STM_GUI_MARKER, which the wrapper checks.
+"""
+import os
+
+from paraview.simple import (ColorBy, GetActiveViewOrCreate, LoadPlugin, OpenDataFile, Render,
+                             SaveScreenshot, Show)
+from vtkmodules.vtkIOImage import vtkPNGReader
+
+LoadPlugin(os.environ["STM_PLUGIN"], ns=globals())
+image = OpenDataFile(os.environ["STM_AAL"])
+assert image.GetXMLName() == "stmNIFTIReader", image.GetXMLName()
+tree = ImageToSpacetree(Input=image)  # noqa: F821 (defined by LoadPlugin)
+balanced = SpacetreeBalance(Input=tree)  # noqa: F821
+mesh = SpacetreeTessellate(Input=balanced)  # noqa: F821
+mesh.UpdatePipeline()
+cells = mesh.GetDataInformation().GetNumberOfCells()
+assert cells == 4650454, cells  # AAL, MaxCellSize 16, BalanceLevel 1, checkerboard template
+
+view = GetActiveViewOrCreate("RenderView")
+display = Show(mesh, view)
+ColorBy(display, ("CELLS", "Material"))
+display.RescaleTransferFunctionToDataRange(True)
+view.CameraPosition = [90, -400, 300]
+view.CameraFocalPoint = [90, 108, 90]
+view.CameraViewUp = [0, 0, 1]
+view.ResetCamera(False)
+Render(view)
+screenshot = os.path.join(os.environ["STM_TEMP_DIR"], "gui_aal_mesh.png")
+SaveScreenshot(screenshot, view, ImageResolution=[800, 600])
+
+# Not blank: the mesh covers a good part of the picture in many colours.
+reader = vtkPNGReader()
+reader.SetFileName(screenshot)
+reader.Update()
+pixels = reader.GetOutput().GetPointData().GetScalars()
+background = pixels.GetTuple(0)
+covered = sum(1 for i in range(0, pixels.GetNumberOfTuples(), 7) if pixels.GetTuple(i) != background)
+colours = {pixels.GetTuple(i) for i in range(0, pixels.GetNumberOfTuples(), 7)}
+fraction = covered / (pixels.GetNumberOfTuples() / 7)
+assert fraction > 0.1, "screenshot nearly blank: %.3f of pixels differ from the background" % fraction
+assert len(colours) > 50, "screenshot has only %d colours" % len(colours)
+print("GUI: %d tetrahedra, screenshot %s (%.0f%% covered, %d colours)" % (cells, screenshot, 100 * fraction, len(colours)))
+with open(os.environ["STM_GUI_MARKER"], "w") as marker:
+    marker.write("ok\n")
