@@ -71,119 +71,34 @@ struct SortedKey
   bool operator==(const SortedKey& other) const { return this->Ids == other.Ids; }
 };
 
-/// Measure of the k-simplex spanned by the rows of edges (k x Dim): sqrt(det(E E^T)) / k!.
-template <int Dim>
-double SimplexMeasure(const std::vector<std::array<double, Dim>>& edges)
+/// Determinant by the Leibniz formula: exact for the small dyadic entries of lattice meshes.
+template <int K>
+double LeibnizDeterminant(const double (&m)[K][K])
 {
-  const int k = static_cast<int>(edges.size());
-  if (k == 0)
+  int permutation[K];
+  for (int i = 0; i < K; ++i)
   {
-    return 1.0;
+    permutation[i] = i;
   }
-  std::vector<double> gram(static_cast<std::size_t>(k * k));
-  for (int i = 0; i < k; ++i)
+  double sum = 0.0;
+  do
   {
-    for (int j = 0; j < k; ++j)
+    int inversions = 0;
+    for (int i = 0; i < K; ++i)
     {
-      double dot = 0.0;
-      for (int axis = 0; axis < Dim; ++axis)
+      for (int j = i + 1; j < K; ++j)
       {
-        dot += edges[i][axis] * edges[j][axis];
-      }
-      gram[i * k + j] = dot;
-    }
-  }
-  double det = 1.0;
-  for (int col = 0; col < k; ++col)
-  {
-    int pivot = col;
-    for (int row = col + 1; row < k; ++row)
-    {
-      if (std::abs(gram[row * k + col]) > std::abs(gram[pivot * k + col]))
-      {
-        pivot = row;
+        inversions += permutation[i] > permutation[j];
       }
     }
-    if (gram[pivot * k + col] == 0.0)
+    double product = 1.0;
+    for (int row = 0; row < K; ++row)
     {
-      return 0.0;
+      product *= m[row][permutation[row]];
     }
-    if (pivot != col)
-    {
-      for (int j = 0; j < k; ++j)
-      {
-        std::swap(gram[pivot * k + j], gram[col * k + j]);
-      }
-      det = -det;
-    }
-    det *= gram[col * k + col];
-    for (int row = col + 1; row < k; ++row)
-    {
-      const double factor = gram[row * k + col] / gram[col * k + col];
-      for (int j = col; j < k; ++j)
-      {
-        gram[row * k + j] -= factor * gram[col * k + j];
-      }
-    }
-  }
-  double factorial = 1.0;
-  for (int i = 2; i <= k; ++i)
-  {
-    factorial *= i;
-  }
-  return std::sqrt(std::max(0.0, det)) / factorial;
-}
-
-template <int Dim>
-double SignedVolume(const std::array<const double*, Dim + 1>& p)
-{
-  double m[Dim][Dim];
-  for (int row = 0; row < Dim; ++row)
-  {
-    for (int col = 0; col < Dim; ++col)
-    {
-      m[row][col] = p[row + 1][col] - p[0][col];
-    }
-  }
-  double det = 1.0;
-  for (int col = 0; col < Dim; ++col)
-  {
-    int pivot = col;
-    for (int row = col + 1; row < Dim; ++row)
-    {
-      if (std::abs(m[row][col]) > std::abs(m[pivot][col]))
-      {
-        pivot = row;
-      }
-    }
-    if (m[pivot][col] == 0.0)
-    {
-      return 0.0;
-    }
-    if (pivot != col)
-    {
-      for (int j = 0; j < Dim; ++j)
-      {
-        std::swap(m[pivot][j], m[col][j]);
-      }
-      det = -det;
-    }
-    det *= m[col][col];
-    for (int row = col + 1; row < Dim; ++row)
-    {
-      const double factor = m[row][col] / m[col][col];
-      for (int j = col; j < Dim; ++j)
-      {
-        m[row][j] -= factor * m[col][j];
-      }
-    }
-  }
-  double factorial = 1.0;
-  for (int i = 2; i <= Dim; ++i)
-  {
-    factorial *= i;
-  }
-  return det / factorial;
+    sum += (inversions % 2 == 0) ? product : -product;
+  } while (std::next_permutation(permutation, permutation + K));
+  return sum;
 }
 
 template <int K>
@@ -246,24 +161,38 @@ MeshInvariantReport CheckSimplicialMesh(const std::vector<double>& points,
   }
   report.UnreferencedPoints = std::count(referenced.begin(), referenced.end(), 0);
 
-  // Volumes.
+  // Volumes: sums of exact determinants (Dim! volumes), divided once at the end.
+  constexpr double factorial = Dim == 1 ? 1.0 : Dim == 2 ? 2.0 : Dim == 3 ? 6.0 : 24.0;
   report.MinimumVolume = report.NumberOfCells > 0 ? 1e300 : 0.0;
+  double totalDeterminant = 0.0;
+  std::map<std::int64_t, double> determinantPerMaterial;
   for (std::int64_t cell = 0; cell < report.NumberOfCells; ++cell)
   {
-    std::array<const double*, N> p;
-    for (int v = 0; v < N; ++v)
+    double m[Dim][Dim];
+    const double* p0 = &points[cells[cell * N] * Dim];
+    for (int row = 0; row < Dim; ++row)
     {
-      p[v] = &points[cells[cell * N + v] * Dim];
+      const double* p = &points[cells[cell * N + row + 1] * Dim];
+      for (int col = 0; col < Dim; ++col)
+      {
+        m[row][col] = p[col] - p0[col];
+      }
     }
-    const double volume = detail::SignedVolume<Dim>(p);
+    const double determinant = detail::LeibnizDeterminant<Dim>(m);
+    const double volume = determinant / factorial;
     report.MinimumVolume = std::min(report.MinimumVolume, volume);
     if (!(volume > 0.0))
     {
       ++report.NonPositiveCells;
     }
-    report.TotalVolume += volume;
+    totalDeterminant += determinant;
     const std::int64_t material = materials ? (*materials)[cell] : 0;
-    report.VolumePerMaterial[material] += volume;
+    determinantPerMaterial[material] += determinant;
+  }
+  report.TotalVolume = totalDeterminant / factorial;
+  for (const auto& entry : determinantPerMaterial)
+  {
+    report.VolumePerMaterial[entry.first] = entry.second / factorial;
   }
 
   // Facets.
@@ -291,20 +220,42 @@ MeshInvariantReport CheckSimplicialMesh(const std::vector<double>& points,
   facets.clear();
   facets.shrink_to_fit();
 
+  double scaledBoundary = 0.0;
   for (const auto& facet : boundary)
   {
-    std::vector<std::array<double, Dim>> edges;
-    for (int v = 1; v < Dim; ++v)
+    if constexpr (Dim == 1)
     {
-      std::array<double, Dim> edge;
-      for (int axis = 0; axis < Dim; ++axis)
-      {
-        edge[axis] = points[facet.Ids[v] * Dim + axis] - points[facet.Ids[0] * Dim + axis];
-      }
-      edges.push_back(edge);
+      scaledBoundary += 1.0;
     }
-    report.BoundaryMeasure += detail::SimplexMeasure<Dim>(edges);
+    else
+    {
+      double edges[Dim - 1][Dim];
+      for (int v = 1; v < Dim; ++v)
+      {
+        for (int axis = 0; axis < Dim; ++axis)
+        {
+          edges[v - 1][axis] =
+            points[facet.Ids[v] * Dim + axis] - points[facet.Ids[0] * Dim + axis];
+        }
+      }
+      double gram[Dim - 1][Dim - 1];
+      for (int i = 0; i < Dim - 1; ++i)
+      {
+        for (int j = 0; j < Dim - 1; ++j)
+        {
+          double dot = 0.0;
+          for (int axis = 0; axis < Dim; ++axis)
+          {
+            dot += edges[i][axis] * edges[j][axis];
+          }
+          gram[i][j] = dot;
+        }
+      }
+      scaledBoundary += std::sqrt(std::max(0.0, detail::LeibnizDeterminant<Dim - 1>(gram)));
+    }
   }
+  constexpr double facetFactorial = Dim <= 2 ? 1.0 : Dim == 3 ? 2.0 : 6.0;
+  report.BoundaryMeasure = scaledBoundary / facetFactorial;
 
   // Closed boundary: ridges of boundary facets are used an even number of times.
   if constexpr (Dim >= 2)

@@ -24,6 +24,25 @@ Status ValidateSpacetree(const Spacetree<Dim>& tree)
   {
     return Status::Invalid("the spacetree's MaxLevel must be between 0 and 20");
   }
+  if (tree.LeafAnchors.size() != tree.LeafLevels.size() ||
+    tree.LeafMaterials.size() != tree.LeafLevels.size())
+  {
+    return Status::Invalid("the spacetree's leaf arrays have different lengths");
+  }
+  {
+    const std::int64_t limit = std::int64_t{ 1 } << 40;
+    std::int64_t count = 1;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      const std::int64_t roots = tree.RootGridDimensions[axis];
+      if (roots >= 1 &&
+        (roots > (limit >> tree.MaxLevel) || count > limit / (roots << tree.MaxLevel)))
+      {
+        return Status::OutOfRange("the spacetree's lattice is too large");
+      }
+      count *= roots >= 1 ? roots << tree.MaxLevel : 1;
+    }
+  }
   for (int axis = 0; axis < Dim; ++axis)
   {
     if (tree.RootGridDimensions[axis] < 1 || tree.ImageDimensions[axis] < 1)

@@ -1,0 +1,586 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#ifndef stmCoreTestUtilities_h
+#define stmCoreTestUtilities_h
+
+// Shared fixtures of the core unit tests: the dimension tag for typed tests, label images with
+// reproducible random content, the build -> balance -> tessellate pipeline, and exact integer
+// reference computations (voxel counts, voxel boundary faces, simplex determinants) that do not
+// reuse any arithmetic of the code under test.
+
+#include "Balance/SpacetreeBalance.h"
+#include "Check/MeshInvariants.h"
+#include "Common/CubeInfo.h"
+#include "Common/Execution.h"
+#include "Common/Status.h"
+#include "Spacetree/Spacetree.h"
+#include "Spacetree/SpacetreeBuild.h"
+#include "Tessellate/SpacetreeTessellation.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <initializer_list>
+#include <iomanip>
+#include <map>
+#include <numeric>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace stmtest
+{
+
+/// Dimension tag for typed tests, the deal.II / p4est way: one test body, every dimension.
+template <int D>
+struct Dim
+{
+  static constexpr int value = D;
+};
+
+using AllDimensions = ::testing::Types<Dim<1>, Dim<2>, Dim<3>, Dim<4>>;
+
+/// The first D entries of a list of extents, so one list of awkward sizes serves every dimension.
+template <int D>
+stm::LatticeIndex<D> FirstExtents(std::initializer_list<std::int64_t> extents)
+{
+  stm::LatticeIndex<D> dims{};
+  auto value = extents.begin();
+  for (int axis = 0; axis < D; ++axis, ++value)
+  {
+    dims[axis] = *value;
+  }
+  return dims;
+}
+
+template <int D>
+stm::LatticeIndex<D> UniformExtents(std::int64_t extent)
+{
+  stm::LatticeIndex<D> dims;
+  dims.fill(extent);
+  return dims;
+}
+
+template <int D>
+std::string ToString(const stm::LatticeIndex<D>& index)
+{
+  std::string text = "(";
+  for (int axis = 0; axis < D; ++axis)
+  {
+    text += (axis ? "," : "") + std::to_string(index[axis]);
+  }
+  return text + ")";
+}
+
+/// Calls visit(index) for every index of the box [lower, upper), axis 0 fastest, which is the
+/// linear (lattice) order used throughout the core.
+template <int D, class Visitor>
+void ForEachIndexInBox(
+  const stm::LatticeIndex<D>& lower, const stm::LatticeIndex<D>& upper, Visitor&& visit)
+{
+  for (int axis = 0; axis < D; ++axis)
+  {
+    if (upper[axis] <= lower[axis])
+    {
+      return;
+    }
+  }
+  stm::LatticeIndex<D> index = lower;
+  for (;;)
+  {
+    visit(static_cast<const stm::LatticeIndex<D>&>(index));
+    int axis = 0;
+    for (; axis < D; ++axis)
+    {
+      if (++index[axis] < upper[axis])
+      {
+        break;
+      }
+      index[axis] = lower[axis];
+    }
+    if (axis == D)
+    {
+      return;
+    }
+  }
+}
+
+template <int D, class Visitor>
+void ForEachIndex(const stm::LatticeIndex<D>& dims, Visitor&& visit)
+{
+  ForEachIndexInBox<D>(stm::LatticeIndex<D>{}, dims, std::forward<Visitor>(visit));
+}
+
+/// A material image that owns its values. Reads outside the image return the background, which
+/// is how the spacetree pads the root grid.
+template <int D>
+class LabelImage
+{
+public:
+  explicit LabelImage(const stm::LatticeIndex<D>& dims)
+    : Dimensions(dims)
+    , Values(static_cast<std::size_t>(stm::NumberOfLatticeCells<D>(dims)), stm::BackgroundMaterial)
+  {
+  }
+
+  const stm::LatticeIndex<D>& GetDimensions() const { return this->Dimensions; }
+
+  bool Contains(const stm::LatticeIndex<D>& voxel) const
+  {
+    for (int axis = 0; axis < D; ++axis)
+    {
+      if (voxel[axis] < 0 || voxel[axis] >= this->Dimensions[axis])
+      {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  stm::MaterialIndex At(const stm::LatticeIndex<D>& voxel) const
+  {
+    return this->Contains(voxel) ? this->Values[stm::LinearIndex<D>(voxel, this->Dimensions)]
+                                 : stm::BackgroundMaterial;
+  }
+
+  void Set(const stm::LatticeIndex<D>& voxel, stm::MaterialIndex material)
+  {
+    this->Values[stm::LinearIndex<D>(voxel, this->Dimensions)] = material;
+  }
+
+  std::int64_t CountVoxels(stm::MaterialIndex material) const
+  {
+    return std::count(this->Values.begin(), this->Values.end(), material);
+  }
+
+  std::int64_t CountBodyVoxels() const
+  {
+    return static_cast<std::int64_t>(this->Values.size()) -
+      this->CountVoxels(stm::BackgroundMaterial);
+  }
+
+  stm::MaterialIndex LargestMaterial() const
+  {
+    return *std::max_element(this->Values.begin(), this->Values.end());
+  }
+
+  stm::MaterialImage<D> View() const { return { this->Dimensions, this->Values.data() }; }
+
+  std::vector<stm::MaterialIndex>& GetValues() { return this->Values; }
+
+private:
+  stm::LatticeIndex<D> Dimensions;
+  std::vector<stm::MaterialIndex> Values;
+};
+
+/// Random image: background, then random boxes of materials 1..materials (coarse leaves and
+/// level jumps of every size), then isolated specks of random materials, which force the finest
+/// level next to coarse regions. std::mt19937 output is fixed by the standard and only `%` is
+/// applied to it, so a seed gives the same image with every standard library.
+template <int D>
+LabelImage<D> MakeRandomImage(
+  const stm::LatticeIndex<D>& dims, unsigned seed, int materials, int boxes, int speckPerMille)
+{
+  LabelImage<D> image(dims);
+  std::mt19937 random(seed);
+  for (int box = 0; box < boxes; ++box)
+  {
+    stm::LatticeIndex<D> lower, upper;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      const std::int64_t a = random() % dims[axis];
+      const std::int64_t b = random() % dims[axis];
+      lower[axis] = std::min(a, b);
+      upper[axis] = std::max(a, b) + 1;
+    }
+    const auto material = static_cast<stm::MaterialIndex>(1 + random() % materials);
+    ForEachIndexInBox<D>(
+      lower, upper, [&](const stm::LatticeIndex<D>& voxel) { image.Set(voxel, material); });
+  }
+  ForEachIndex<D>(dims,
+    [&](const stm::LatticeIndex<D>& voxel)
+    {
+      if (static_cast<int>(random() % 1000) < speckPerMille)
+      {
+        image.Set(voxel, static_cast<stm::MaterialIndex>(random() % (materials + 1)));
+      }
+    });
+  return image;
+}
+
+/// Label values of materials 0..count-1; deliberately not equal to the indices.
+inline std::vector<std::int64_t> MaterialLabels(int count)
+{
+  std::vector<std::int64_t> labels;
+  for (int material = 0; material < count; ++material)
+  {
+    labels.push_back(material == 0 ? 0 : 100 + 7 * material);
+  }
+  return labels;
+}
+
+/// Builds the spacetree of an image and, when balanceLevel > 0, balances it.
+template <int D, class Executor>
+stm::Status BuildTree(const LabelImage<D>& image, std::int64_t maxCellSize, int balanceLevel,
+  bool faceBalanceOnly, Executor& executor, stm::Spacetree<D>& tree)
+{
+  stm::SpacetreeBuildOptions buildOptions;
+  buildOptions.MaxCellSize = maxCellSize;
+  stm::Status status = stm::SpacetreeBuilder<D>().Build(
+    image.View(), MaterialLabels(image.LargestMaterial() + 1), buildOptions, tree, executor);
+  if (!status.IsOk() || balanceLevel <= 0)
+  {
+    return status;
+  }
+  stm::SpacetreeBalanceOptions balanceOptions;
+  balanceOptions.BalanceLevel = balanceLevel;
+  balanceOptions.FaceBalanceOnly = faceBalanceOnly;
+  return stm::SpacetreeBalancer<D>().Balance(tree, balanceOptions, executor);
+}
+
+/// The output of the tessellator, in the form the VTK layer would copy it.
+template <int D>
+struct SimplicialMesh
+{
+  std::vector<std::int64_t> Connectivity;
+  std::vector<stm::MaterialIndex> Materials;
+  /// Point coordinates in half lattice units, indexed by point id.
+  std::vector<stm::LatticeIndex<D>> HalfUnitPoints;
+  /// How many times VisitPoints reported each point id (must be exactly once).
+  std::vector<int> VisitCounts;
+
+  std::int64_t GetNumberOfSimplices() const
+  {
+    return static_cast<std::int64_t>(this->Connectivity.size()) / (D + 1);
+  }
+  std::int64_t GetNumberOfPoints() const
+  {
+    return static_cast<std::int64_t>(this->HalfUnitPoints.size());
+  }
+  const stm::LatticeIndex<D>& Vertex(std::int64_t simplex, int corner) const
+  {
+    return this->HalfUnitPoints[this->Connectivity[simplex * (D + 1) + corner]];
+  }
+  /// Coordinates in lattice units (voxel edge = 1): exact, since they are halves of integers.
+  std::vector<double> Coordinates() const
+  {
+    std::vector<double> coordinates;
+    coordinates.reserve(this->HalfUnitPoints.size() * D);
+    for (const auto& point : this->HalfUnitPoints)
+    {
+      for (int axis = 0; axis < D; ++axis)
+      {
+        coordinates.push_back(0.5 * static_cast<double>(point[axis]));
+      }
+    }
+    return coordinates;
+  }
+  std::vector<std::int64_t> MaterialsAsInt64() const
+  {
+    return std::vector<std::int64_t>(this->Materials.begin(), this->Materials.end());
+  }
+};
+
+template <int D, class Executor>
+stm::Status TessellateTree(const stm::Spacetree<D>& tree,
+  const stm::SpacetreeTessellationOptions& options, Executor& executor, SimplicialMesh<D>& mesh)
+{
+  stm::SpacetreeTessellator<D> tessellator;
+  stm::Status status = tessellator.Prepare(tree, options, executor);
+  if (!status.IsOk())
+  {
+    return status;
+  }
+  mesh.Connectivity.assign(
+    static_cast<std::size_t>(tessellator.GetNumberOfSimplices() * (D + 1)), -1);
+  mesh.Materials.assign(static_cast<std::size_t>(tessellator.GetNumberOfSimplices()), 0xFFFF);
+  status = tessellator.WriteSimplices(mesh.Connectivity.data(), mesh.Materials.data(), executor);
+  if (!status.IsOk())
+  {
+    return status;
+  }
+  stm::LatticeIndex<D> unset;
+  unset.fill(-1);
+  mesh.HalfUnitPoints.assign(static_cast<std::size_t>(tessellator.GetNumberOfPoints()), unset);
+  mesh.VisitCounts.assign(static_cast<std::size_t>(tessellator.GetNumberOfPoints()), 0);
+  // Each id is visited by exactly one thread, so plain writes to distinct slots are race-free.
+  auto visit = [&mesh](std::int64_t id, const stm::LatticeIndex<D>& point)
+  {
+    if (id >= 0 && id < mesh.GetNumberOfPoints())
+    {
+      mesh.HalfUnitPoints[id] = point;
+      ++mesh.VisitCounts[id];
+    }
+  };
+  return tessellator.VisitPoints(visit, executor);
+}
+
+/// Exact floating-point equality that prints both values in full when they differ (gtest's
+/// EXPECT_EQ prints 63.999999999999631 as 64).
+inline ::testing::AssertionResult ExactlyEqual(double actual, double expected)
+{
+  if (actual == expected)
+  {
+    return ::testing::AssertionSuccess();
+  }
+  return ::testing::AssertionFailure() << std::setprecision(17) << actual << " is not exactly "
+                                       << expected << " (difference " << actual - expected << ")";
+}
+
+/// CheckSimplicialMesh sums exact determinants and divides once, so its volumes and boundary
+/// measures of lattice meshes are exact: the checker's values must equal the integer references.
+constexpr double CheckerRelativeTolerance = 0.0;
+
+inline ::testing::AssertionResult CheckerMeasureMatches(double checkerValue, double exactValue)
+{
+  const double allowed = CheckerRelativeTolerance * std::max(1.0, std::abs(exactValue));
+  if (std::abs(checkerValue - exactValue) <= allowed)
+  {
+    return ::testing::AssertionSuccess();
+  }
+  return ::testing::AssertionFailure() << std::setprecision(17) << "checker value " << checkerValue
+                                       << " differs from the exact " << exactValue;
+}
+
+template <int D>
+stm::MeshInvariantReport CheckMesh(const SimplicialMesh<D>& mesh)
+{
+  const std::vector<std::int64_t> materials = mesh.MaterialsAsInt64();
+  return stm::CheckSimplicialMesh<D>(mesh.Coordinates(), mesh.Connectivity, &materials);
+}
+
+/// Determinant by the Leibniz formula: a sum over permutations with the sign from the
+/// inversion count, deliberately unlike the elimination used by the code under test.
+template <int N>
+std::int64_t LeibnizDeterminant(const std::array<std::array<std::int64_t, N>, N>& m)
+{
+  std::array<int, N> permutation;
+  std::iota(permutation.begin(), permutation.end(), 0);
+  std::int64_t determinant = 0;
+  do
+  {
+    int inversions = 0;
+    for (int i = 0; i < N; ++i)
+    {
+      for (int j = i + 1; j < N; ++j)
+      {
+        inversions += permutation[i] > permutation[j];
+      }
+    }
+    std::int64_t product = 1;
+    for (int row = 0; row < N; ++row)
+    {
+      product *= m[row][permutation[row]];
+    }
+    determinant += (inversions % 2 == 0) ? product : -product;
+  } while (std::next_permutation(permutation.begin(), permutation.end()));
+  return determinant;
+}
+
+/// D! times the signed volume of a simplex of integer points.
+template <int D>
+std::int64_t ScaledSignedVolume(const std::array<stm::LatticeIndex<D>, D + 1>& vertices)
+{
+  std::array<std::array<std::int64_t, D>, D> edges;
+  for (int row = 0; row < D; ++row)
+  {
+    for (int axis = 0; axis < D; ++axis)
+    {
+      edges[row][axis] = vertices[row + 1][axis] - vertices[0][axis];
+    }
+  }
+  return LeibnizDeterminant<D>(edges);
+}
+
+/// Exact integer measures of a mesh, in units of (half lattice unit)^D / D! for volumes and
+/// (half lattice unit)^(D-1) / (D-1)! for boundary facets.
+struct ExactMeasures
+{
+  std::map<std::int64_t, std::int64_t> ScaledVolumePerMaterial;
+  std::int64_t ScaledTotalVolume = 0;
+  std::int64_t NonPositiveSimplices = 0;
+  std::int64_t BoundaryFacets = 0;
+  /// Boundary facets that do not lie in a plane orthogonal to an axis; the boundary of a union
+  /// of voxels has none.
+  std::int64_t SkewBoundaryFacets = 0;
+  std::int64_t ScaledBoundaryMeasure = 0;
+};
+
+template <int D>
+ExactMeasures ComputeExactMeasures(const SimplicialMesh<D>& mesh)
+{
+  ExactMeasures measures;
+  std::vector<std::array<std::int64_t, D>> facets;
+  for (std::int64_t simplex = 0; simplex < mesh.GetNumberOfSimplices(); ++simplex)
+  {
+    std::array<stm::LatticeIndex<D>, D + 1> vertices;
+    for (int corner = 0; corner <= D; ++corner)
+    {
+      vertices[corner] = mesh.Vertex(simplex, corner);
+    }
+    const std::int64_t volume = ScaledSignedVolume<D>(vertices);
+    measures.NonPositiveSimplices += volume <= 0;
+    measures.ScaledVolumePerMaterial[mesh.Materials[simplex]] += volume;
+    measures.ScaledTotalVolume += volume;
+    for (int skipped = 0; skipped <= D; ++skipped)
+    {
+      std::array<std::int64_t, D> facet;
+      int next = 0;
+      for (int corner = 0; corner <= D; ++corner)
+      {
+        if (corner != skipped)
+        {
+          facet[next++] = mesh.Connectivity[simplex * (D + 1) + corner];
+        }
+      }
+      std::sort(facet.begin(), facet.end());
+      facets.push_back(facet);
+    }
+  }
+  std::sort(facets.begin(), facets.end());
+  for (std::size_t first = 0; first < facets.size();)
+  {
+    std::size_t last = first + 1;
+    while (last < facets.size() && facets[last] == facets[first])
+    {
+      ++last;
+    }
+    if (last - first == 1)
+    {
+      ++measures.BoundaryFacets;
+      const auto& facet = facets[first];
+      int normalAxis = -1;
+      for (int axis = 0; axis < D && normalAxis < 0; ++axis)
+      {
+        bool flat = true;
+        for (int corner = 1; corner < D; ++corner)
+        {
+          flat =
+            flat && mesh.HalfUnitPoints[facet[corner]][axis] == mesh.HalfUnitPoints[facet[0]][axis];
+        }
+        normalAxis = flat ? axis : -1;
+      }
+      if (normalAxis < 0)
+      {
+        ++measures.SkewBoundaryFacets;
+      }
+      else
+      {
+        // The facet's measure is that of its projection along the normal axis.
+        std::array<std::array<std::int64_t, D - 1>, D - 1> edges;
+        for (int row = 0; row < D - 1; ++row)
+        {
+          int column = 0;
+          for (int axis = 0; axis < D; ++axis)
+          {
+            if (axis != normalAxis)
+            {
+              edges[row][column++] =
+                mesh.HalfUnitPoints[facet[row + 1]][axis] - mesh.HalfUnitPoints[facet[0]][axis];
+            }
+          }
+        }
+        const std::int64_t measure = LeibnizDeterminant<D - 1>(edges);
+        measures.ScaledBoundaryMeasure += measure < 0 ? -measure : measure;
+      }
+    }
+    first = last;
+  }
+  return measures;
+}
+
+/// Faces between a body voxel (any non-background material) and a non-body voxel, counting the
+/// faces on the image border: the boundary measure of the voxel model, in voxel faces.
+template <int D>
+std::int64_t CountVoxelBoundaryFaces(const LabelImage<D>& image)
+{
+  std::int64_t faces = 0;
+  ForEachIndex<D>(image.GetDimensions(),
+    [&](const stm::LatticeIndex<D>& voxel)
+    {
+      if (image.At(voxel) == stm::BackgroundMaterial)
+      {
+        return;
+      }
+      for (int axis = 0; axis < D; ++axis)
+      {
+        for (int step : { -1, 1 })
+        {
+          stm::LatticeIndex<D> neighbor = voxel;
+          neighbor[axis] += step;
+          faces += image.At(neighbor) == stm::BackgroundMaterial;
+        }
+      }
+    });
+  return faces;
+}
+
+/// Number of lattice cells (voxels) covered by a leaf.
+template <int D>
+std::int64_t LeafVolume(const stm::Spacetree<D>& tree, std::int64_t leaf)
+{
+  return stm::IntPow(2, D * (tree.MaxLevel - tree.LeafLevels[leaf]));
+}
+
+template <int D>
+std::int64_t LatticeVolume(const stm::Spacetree<D>& tree)
+{
+  return stm::NumberOfLatticeCells<D>(tree.GetLatticeDimensions());
+}
+
+/// For every lattice cell of the root grid, the index of the leaf covering it; -1 where no leaf
+/// does. Leaves that overlap or leave the root grid are counted in the return value.
+template <int D>
+std::int64_t MapCellsToLeaves(const stm::Spacetree<D>& tree, std::vector<std::int64_t>& cellToLeaf)
+{
+  const stm::LatticeIndex<D> dims = tree.GetLatticeDimensions();
+  cellToLeaf.assign(static_cast<std::size_t>(stm::NumberOfLatticeCells<D>(dims)), -1);
+  std::int64_t conflicts = 0;
+  for (std::int64_t leaf = 0; leaf < tree.GetNumberOfLeaves(); ++leaf)
+  {
+    const std::int64_t size = tree.GetCellSize(tree.LeafLevels[leaf]);
+    stm::LatticeIndex<D> upper;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      upper[axis] = tree.LeafAnchors[leaf][axis] + size;
+      if (tree.LeafAnchors[leaf][axis] < 0 || upper[axis] > dims[axis])
+      {
+        ++conflicts;
+        upper[axis] = std::min(upper[axis], dims[axis]);
+      }
+    }
+    ForEachIndexInBox<D>(tree.LeafAnchors[leaf], upper,
+      [&](const stm::LatticeIndex<D>& cell)
+      {
+        std::int64_t& owner = cellToLeaf[stm::LinearIndex<D>(cell, dims)];
+        conflicts += owner >= 0;
+        owner = leaf;
+      });
+  }
+  return conflicts;
+}
+
+/// Lattice cells of the root grid whose leaf material differs from the image (padding reads as
+/// background).
+template <int D>
+std::int64_t CountMaterialMismatches(const stm::Spacetree<D>& tree, const LabelImage<D>& image)
+{
+  std::vector<std::int64_t> cellToLeaf;
+  MapCellsToLeaves<D>(tree, cellToLeaf);
+  const stm::LatticeIndex<D> dims = tree.GetLatticeDimensions();
+  std::int64_t mismatches = 0;
+  ForEachIndex<D>(dims,
+    [&](const stm::LatticeIndex<D>& cell)
+    {
+      const std::int64_t leaf = cellToLeaf[stm::LinearIndex<D>(cell, dims)];
+      mismatches += leaf < 0 || tree.LeafMaterials[leaf] != image.At(cell);
+    });
+  return mismatches;
+}
+
+} // namespace stmtest
+
+#endif
