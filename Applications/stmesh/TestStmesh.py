@@ -180,7 +180,7 @@ def case_default_input_vtu(c):
     check(summary["default_input"] is True and summary["input"] == c.aal, "bad input in summary")
     check(summary["output"] == output, "bad output in summary")
     check(summary["parameters"] == {"labels": [], "all_labels": True, "max_cell_size": 16,
-                                    "balance": 1, "stop_after": "tessellate"},
+                                    "balance": 1, "stop_after": "tessellate", "compressor": "lz4"},
           "bad parameters %s" % summary["parameters"])
     check([entry["name"] for entry in summary["stages"]] == STAGES_TESSELLATE, "bad stages")
     check(summary["image"]["dimensions"] == [181, 217, 181], "bad image dimensions")
@@ -199,7 +199,7 @@ def case_default_input_vtu(c):
     head = content[:4096]
     check(b'format="binary"' in head and b'format="appended"' not in content
           and b"<AppendedData" not in content, "the .vtu is not in inline binary mode")
-    check(b'compressor="vtkZLibDataCompressor"' in head, "the .vtu is not zlib-compressed")
+    check(b'compressor="vtkLZ4DataCompressor"' in head, "the .vtu is not LZ4-compressed (the default)")
 
 
 def case_legacy_vtk(c):
@@ -275,6 +275,21 @@ def case_input_formats(c):
             reference = mesh
         check(mesh == reference, "%s gives a different mesh than labels.vti" % name)
 
+    # Every compressor writes the same mesh; each file names its compressor.
+    image = c.make_image("compressors.vti", "uint8")
+    for compressor, marker in [("lz4", b'compressor="vtkLZ4DataCompressor"'),
+                               ("zlib", b'compressor="vtkZLibDataCompressor"'),
+                               ("none", None)]:
+        output = c.path("compressor_%s.vtu" % compressor)
+        c.run_ok([image, "-o", output, "--compressor", compressor])
+        with open(output, "rb") as mesh_file:
+            head = mesh_file.read(4096)
+        if marker:
+            check(marker in head, "--compressor %s: %s missing" % (compressor, marker))
+        else:
+            check(b"compressor=" not in head, "--compressor none: the file names a compressor")
+        check(c.read_back(output) == reference, "--compressor %s changes the mesh" % compressor)
+
 
 def case_default_output_name(c):
     image = c.make_image("phantom.nii.gz")
@@ -325,7 +340,7 @@ def case_summary_json(c):
                 "tetrahedra_per_material"]:
         check(key in summary, "summary lacks %s" % key)
     check(summary["parameters"] == {"labels": [2, 7], "all_labels": False, "max_cell_size": 4,
-                                    "balance": 2, "stop_after": "tessellate"},
+                                    "balance": 2, "stop_after": "tessellate", "compressor": "lz4"},
           "bad parameters %s" % summary["parameters"])
     for entry in summary["stages"]:
         for key in ["name", "seconds", "cells", "points", "leaves", "peak_rss_mib"]:
@@ -460,6 +475,7 @@ def case_error_bad_values(c):
             (["--labels", "1,1"], "listed twice"),
             (["--labels", "0"], "background"),
             (["--stop-after", "mesh"], "not one of"),
+            (["--compressor", "gzip"], "not one of lz4, zlib, none"),
             (["--bogus"], "unknown option"),
             (["--balance"], "needs a value"),
             (["--balance", "1", "--balance", "2"], "more than once"),

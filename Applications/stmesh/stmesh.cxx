@@ -86,6 +86,7 @@ const int MaxThreads = 4096;
 const char* const UsageText =
   R"(Usage: stmesh [INPUT] [-o OUTPUT] [--labels 1,2,5] [--max-cell-size N] [--balance L]
               [--stop-after spacetree|balance|tessellate] [--threads N] [--summary FILE.json]
+              [--compressor lz4|zlib|none]
        stmesh -h|--help
        stmesh --version
 
@@ -96,7 +97,7 @@ Arguments:
   INPUT                 label image: .nii, .nii.gz (NIfTI), .mha, .mhd (MetaImage), .nrrd, .nhdr
                         (NRRD) or .vti (VTK XML image); integer scalars. Default:
                         /usr/share/mricron/templates/aal.nii.gz (Debian package mricron-data).
-  -o OUTPUT             .vtu (VTK XML, binary, zlib) or .vtk (legacy VTK, binary). Default:
+  -o OUTPUT             .vtu (VTK XML, inline binary) or .vtk (legacy VTK, binary). Default:
                         the input's base name with .vtu, in the current directory.
   --labels L1,L2,...    labels that form the body of interest. Default: every non-zero label.
   --max-cell-size N     largest leaf edge in voxels, 1 to 1048576. Default 16.
@@ -106,6 +107,9 @@ Arguments:
   --threads N           number of threads, 1 to 4096. Default: all cores, or VTK_SMP_MAX_THREADS.
                         The STDThread backend is used unless VTK_SMP_BACKEND_IN_USE is set.
   --summary FILE.json   also write the per-stage figures and per-material counts as JSON.
+  --compressor C        compression of .vtu files: lz4 (the default, fastest), zlib (files
+                        about 2.3 times smaller, written about 1 s slower per 5 million
+                        tetrahedra) or none.
   -h, --help            show this help and exit.
   --version             show the version and exit.
 
@@ -299,6 +303,7 @@ struct Options
   StopStage StopAfter = StopStage::Tessellate;
   int Threads = 0; // 0: not given on the command line
   std::string SummaryPath;
+  std::string Compressor = "lz4"; // of .vtu files: lz4, zlib or none
 };
 
 // strtoll skips leading blanks and stops at the first non-digit, so "3x", " 3" or "" would slip
@@ -415,7 +420,7 @@ Options ParseCommandLine(int argc, char* argv[])
       inlineValue = true;
     }
     static const std::set<std::string> valueOptions = { "-o", "--labels", "--max-cell-size",
-      "--balance", "--stop-after", "--threads", "--summary" };
+      "--balance", "--stop-after", "--threads", "--summary", "--compressor" };
     if (valueOptions.count(name) == 0)
     {
       throw UsageError("unknown option '" + name + "'");
@@ -472,6 +477,14 @@ Options ParseCommandLine(int argc, char* argv[])
         throw UsageError(
           "--stop-after: '" + value + "' is not one of spacetree, balance, tessellate");
       }
+    }
+    else if (name == "--compressor")
+    {
+      if (value != "lz4" && value != "zlib" && value != "none")
+      {
+        throw UsageError("--compressor: '" + value + "' is not one of lz4, zlib, none");
+      }
+      options.Compressor = value;
     }
     else if (name == "--threads")
     {
@@ -1113,8 +1126,8 @@ long long FileSize(const std::string& path)
   return stat(path.c_str(), &info) == 0 ? static_cast<long long>(info.st_size) : -1;
 }
 
-void WriteMesh(
-  vtkUnstructuredGrid* grid, const std::string& path, MeshFormat format, StageReport& report)
+void WriteMesh(vtkUnstructuredGrid* grid, const std::string& path, MeshFormat format,
+  const std::string& compressor, StageReport& report)
 {
   const std::string context = "writing '" + path + "'";
   TemporaryFile temporary(path);
@@ -1129,10 +1142,25 @@ void WriteMesh(
     writer->SetFileName(temporary.GetPath().c_str());
     // Inline binary, never appended: Debian 12's libexpat fails on appended-mode files.
     writer->SetDataModeToBinary();
-    // zlib level 1 is about twice as fast as the default level 5 on meshes and its files are
-    // only ~2% larger; the writer compresses on one thread, so this matters.
-    writer->SetCompressorTypeToZLib();
-    writer->SetCompressionLevel(1);
+    // The writer compresses and base64-encodes on one thread, so the compressor sets the write
+    // time: LZ4 is the fastest; zlib at level 1 (about twice as fast as its default level 5,
+    // files ~2% larger) makes files about 2.3 times smaller than LZ4.
+    if (compressor == "zlib")
+    {
+      writer->SetCompressorTypeToZLib();
+      writer->SetCompressionLevel(1);
+    }
+    else if (compressor == "lz4")
+    {
+      writer->SetCompressorTypeToLZ4();
+    }
+    else
+    {
+      writer->SetCompressorTypeToNone();
+    }
+    // Each compressed block pays for a new compressor stream: 1 MiB blocks instead of the
+    // default 32 KiB make the AAL mesh's write about a third faster for the same file size.
+    writer->SetBlockSize(1 << 20);
     // 64-bit headers lift the 4 GiB limit on one array.
     writer->SetHeaderTypeToUInt64();
     written = writer->Write();
@@ -1307,7 +1335,8 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
   json << "], \"all_labels\": " << (options.Labels.empty() ? "true" : "false")
        << ", \"max_cell_size\": " << options.MaxCellSize
        << ", \"balance\": " << options.BalanceLevel
-       << ", \"stop_after\": " << JsonString(StopStageName(options.StopAfter)) << "},\n";
+       << ", \"stop_after\": " << JsonString(StopStageName(options.StopAfter))
+       << ", \"compressor\": " << JsonString(options.Compressor) << "},\n";
   json << "  \"threads\": " << summary.Threads.Threads << ",\n";
   json << "  \"smp_backend\": " << JsonString(summary.Threads.Backend) << ",\n";
   json << "  \"stages\": [\n";
@@ -1461,7 +1490,7 @@ int Run(const Options& options)
 
   StageReport writeReport;
   writeReport.Name = "write";
-  WriteMesh(grid, output, meshFormat, writeReport);
+  WriteMesh(grid, output, meshFormat, options.Compressor, writeReport);
   summary.Stages.push_back(writeReport);
   summary.TotalSeconds = SecondsSince(start);
 
