@@ -904,28 +904,6 @@ struct ImageInfo
   std::string Format;
 };
 
-bool IsIntegerType(int type)
-{
-  switch (type)
-  {
-    case VTK_CHAR:
-    case VTK_SIGNED_CHAR:
-    case VTK_UNSIGNED_CHAR:
-    case VTK_SHORT:
-    case VTK_UNSIGNED_SHORT:
-    case VTK_INT:
-    case VTK_UNSIGNED_INT:
-    case VTK_LONG:
-    case VTK_UNSIGNED_LONG:
-    case VTK_LONG_LONG:
-    case VTK_UNSIGNED_LONG_LONG:
-    case VTK_ID_TYPE:
-      return true;
-    default:
-      return false;
-  }
-}
-
 void CheckReadableFile(const std::string& path)
 {
   struct stat info;
@@ -1053,7 +1031,7 @@ vtkSmartPointer<vtkImageData> ReadImage(
     throw Failure(context + ": the image has " + std::to_string(labels->GetNumberOfComponents()) +
       " components per voxel; stmesh needs one integer label per voxel");
   }
-  if (!IsIntegerType(labels->GetDataType()))
+  if (!stmImageToSpacetree::IsLabelType(labels->GetDataType()))
   {
     throw Failure(context + ": the image holds " + info.ScalarType +
       " values; stmesh needs an integer label image (a segmentation, not a gray-value image)");

@@ -33,28 +33,6 @@ namespace
 // Label ranges up to this size get a direct lookup table; wider ones use binary search.
 constexpr long long LookupTableLimit = 1 << 24;
 
-bool IsIntegerType(int type)
-{
-  switch (type)
-  {
-    case VTK_CHAR:
-    case VTK_SIGNED_CHAR:
-    case VTK_UNSIGNED_CHAR:
-    case VTK_SHORT:
-    case VTK_UNSIGNED_SHORT:
-    case VTK_INT:
-    case VTK_UNSIGNED_INT:
-    case VTK_LONG:
-    case VTK_UNSIGNED_LONG:
-    case VTK_LONG_LONG:
-    case VTK_UNSIGNED_LONG_LONG:
-    case VTK_ID_TYPE:
-      return true;
-    default:
-      return false;
-  }
-}
-
 /// Distinct label values of an integer array, sorted; fails for labels outside int32.
 struct CollectLabels
 {
@@ -176,6 +154,28 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
   return true;
 }
 } // namespace
+
+bool stmImageToSpacetree::IsLabelType(int dataType)
+{
+  switch (dataType)
+  {
+    case VTK_CHAR:
+    case VTK_SIGNED_CHAR:
+    case VTK_UNSIGNED_CHAR:
+    case VTK_SHORT:
+    case VTK_UNSIGNED_SHORT:
+    case VTK_INT:
+    case VTK_UNSIGNED_INT:
+    case VTK_LONG:
+    case VTK_UNSIGNED_LONG:
+    case VTK_LONG_LONG:
+    case VTK_UNSIGNED_LONG_LONG:
+    case VTK_ID_TYPE:
+      return true;
+    default:
+      return false;
+  }
+}
 
 stmImageToSpacetree::stmImageToSpacetree()
 {
@@ -312,7 +312,7 @@ int stmImageToSpacetree::RequestData(
     return 0;
   }
   const int type = labels->GetDataType();
-  if (!IsIntegerType(type))
+  if (!stmImageToSpacetree::IsLabelType(type))
   {
     vtkErrorMacro("The label array \""
       << (labels->GetName() ? labels->GetName() : "") << "\" is of type "

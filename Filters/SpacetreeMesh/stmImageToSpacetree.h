@@ -39,6 +39,11 @@ public:
   vtkTypeMacro(stmImageToSpacetree, vtkUnstructuredGridAlgorithm);
   void PrintSelf(ostream& os, vtkIndent indent) override;
 
+  /**
+   * Whether arrays of this VTK data type (VTK_INT, ...) can hold labels: the integer types.
+   */
+  static bool IsLabelType(int dataType);
+
   ///@{
   /**
    * The labels that form the body of interest. Empty (the default) means every label present

@@ -53,19 +53,12 @@ int stmSpacetreeBalance::RequestData(
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
   vtkUnstructuredGrid* input = nullptr;
   stmSpacetreeGeometry geometry;
-  std::string error;
-  switch (stmSpacetreeData::ReadInput(inputVector[0], input, geometry, error))
+  int requestResult = 0;
+  if (!stmSpacetreeData::BeginRequest(this, inputVector[0], output, input, geometry, requestResult))
   {
-    case stmSpacetreeData::InputStatus::UpstreamAborted:
-      output->Initialize();
-      return 1;
-    case stmSpacetreeData::InputStatus::Invalid:
-      output->Initialize();
-      vtkErrorMacro("SpacetreeBalance: " << error);
-      return 0;
-    case stmSpacetreeData::InputStatus::Ready:
-      break;
+    return requestResult;
   }
+  std::string error;
   stm::SpacetreeBalanceOptions options;
   options.BalanceLevel = this->BalanceLevel;
   options.FaceBalanceOnly = this->FaceBalanceOnly;
@@ -73,16 +66,5 @@ int stmSpacetreeBalance::RequestData(
   const bool balanced = geometry.Dimension == 3
     ? Balance<3>(input, geometry, options, executor, output, error)
     : Balance<2>(input, geometry, options, executor, output, error);
-  if (!balanced)
-  {
-    output->Initialize();
-    if (this->GetAbortExecute())
-    {
-      return 1;
-    }
-    vtkErrorMacro("SpacetreeBalance failed: " << error);
-    return 0;
-  }
-  this->UpdateProgress(1.0);
-  return 1;
+  return stmSpacetreeData::EndRequest(this, balanced, error, output);
 }

@@ -115,22 +115,49 @@ bool GetDoubles(vtkFieldData* fd, const char* name, int count, double* values, s
 namespace stmSpacetreeData
 {
 
-InputStatus ReadInput(vtkInformationVector* inputPort, vtkUnstructuredGrid*& grid,
-  stmSpacetreeGeometry& geometry, std::string& error)
+bool BeginRequest(vtkAlgorithm* filter, vtkInformationVector* inputPort,
+  vtkUnstructuredGrid* output, vtkUnstructuredGrid*& input, stmSpacetreeGeometry& geometry,
+  int& requestResult)
 {
   vtkInformation* info = inputPort->GetInformationObject(0);
-  grid = vtkUnstructuredGrid::GetData(inputPort, 0);
+  input = vtkUnstructuredGrid::GetData(inputPort, 0);
+  std::string error;
   if (info && info->Get(vtkAlgorithm::ABORTED()))
   {
-    return InputStatus::UpstreamAborted;
+    // An upstream filter was aborted: produce an empty output quietly.
+    output->Initialize();
+    requestResult = 1;
+    return false;
   }
-  if (!grid)
+  if (!input)
   {
     error = "the input must be the vtkUnstructuredGrid output of ImageToSpacetree";
-    return InputStatus::Invalid;
   }
-  return ReadGeometry(grid->GetFieldData(), geometry, error) ? InputStatus::Ready
-                                                             : InputStatus::Invalid;
+  if (input && ReadGeometry(input->GetFieldData(), geometry, error))
+  {
+    return true;
+  }
+  output->Initialize();
+  vtkErrorWithObjectMacro(filter, << filter->GetClassName() << ": " << error);
+  requestResult = 0;
+  return false;
+}
+
+int EndRequest(
+  vtkAlgorithm* filter, bool succeeded, const std::string& error, vtkUnstructuredGrid* output)
+{
+  if (succeeded)
+  {
+    filter->UpdateProgress(1.0);
+    return 1;
+  }
+  output->Initialize();
+  if (filter->GetAbortExecute())
+  {
+    return 1;
+  }
+  vtkErrorWithObjectMacro(filter, << filter->GetClassName() << " failed: " << error);
+  return 0;
 }
 
 void RemoveSpacetreeFieldData(vtkFieldData* fieldData)

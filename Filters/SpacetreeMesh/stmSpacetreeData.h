@@ -16,6 +16,7 @@
 
 #include <string>
 
+class vtkAlgorithm;
 class vtkFieldData;
 class vtkInformationVector;
 class vtkUnstructuredGrid;
@@ -52,18 +53,17 @@ struct stmSpacetreeGeometry
 
 namespace stmSpacetreeData
 {
-/// What a filter that consumes a spacetree finds on its input port.
-enum class InputStatus
-{
-  Ready,
-  /// An upstream filter was aborted: produce an empty output quietly.
-  UpstreamAborted,
-  Invalid
-};
+/// The start of RequestData of a filter that consumes a spacetree: the grid on the input port
+/// and its geometry. False when the filter must stop: the output is then cleared, an error is
+/// reported unless an upstream filter was aborted, and requestResult is what RequestData returns.
+bool BeginRequest(vtkAlgorithm* filter, vtkInformationVector* inputPort,
+  vtkUnstructuredGrid* output, vtkUnstructuredGrid*& input, stmSpacetreeGeometry& geometry,
+  int& requestResult);
 
-/// The grid on the input port and its geometry; Invalid comes with a message.
-InputStatus ReadInput(vtkInformationVector* inputPort, vtkUnstructuredGrid*& grid,
-  stmSpacetreeGeometry& geometry, std::string& error);
+/// The end of RequestData of such a filter: on failure the output is cleared and the error
+/// reported, unless the filter itself was aborted. Returns what RequestData returns.
+int EndRequest(
+  vtkAlgorithm* filter, bool succeeded, const std::string& error, vtkUnstructuredGrid* output);
 
 /// Removes the spacetree's field arrays (a mesh is not a spacetree).
 void RemoveSpacetreeFieldData(vtkFieldData* fieldData);

