@@ -9,6 +9,7 @@
 #include "vtkCommand.h"
 #include "vtkDoubleArray.h"
 #include "vtkExecutive.h"
+#include "vtkExtractVOI.h"
 #include "vtkFieldData.h"
 #include "vtkFloatArray.h"
 #include "vtkIntArray.h"
@@ -155,6 +156,12 @@ struct Case
   int CellTemplate;
 };
 
+std::string CaseName(const ::testing::TestParamInfo<Case>& info)
+{
+  return std::to_string(info.param.Dimension) + "D_L" + std::to_string(info.param.BalanceLevel) +
+    (info.param.CellTemplate == 0 ? "_Checkerboard" : "_Kuhn");
+}
+
 class SyntheticPipeline : public ::testing::TestWithParam<Case>
 {
 };
@@ -241,22 +248,18 @@ INSTANTIATE_TEST_SUITE_P(DimensionsAndBalance, SyntheticPipeline,
   ::testing::Values(Case{ 2, 0, 0 }, Case{ 2, 1, 0 }, Case{ 2, 2, 0 }, Case{ 2, 3, 0 },
     Case{ 2, 1, 1 }, Case{ 3, 0, 0 }, Case{ 3, 1, 0 }, Case{ 3, 2, 0 }, Case{ 3, 3, 0 },
     Case{ 3, 1, 1 }, Case{ 3, 3, 1 }),
-  [](const ::testing::TestParamInfo<Case>& info)
-  {
-    return std::to_string(info.param.Dimension) + "D_L" + std::to_string(info.param.BalanceLevel) +
-      (info.param.CellTemplate == 0 ? "_Checkerboard" : "_Kuhn");
-  });
+  CaseName);
 
 /// Element quality never exceeds the worst case observed over the AAL atlas and random images
 /// (docs/quality.md, isotropic voxels): the tessellation yields a finite set of shapes per
 /// balance level, and a regression that made worse elements would show here.
-TEST_P(SyntheticPipeline, QualityWithinObservedBounds)
+class BalancedQuality : public ::testing::TestWithParam<Case>
+{
+};
+
+TEST_P(BalancedQuality, WithinObservedBounds)
 {
   const Case c = GetParam();
-  if (c.BalanceLevel == 0)
-  {
-    GTEST_SKIP() << "an unbalanced tree has no level-specific bound";
-  }
   const int dims[3] = { 45, 38, c.Dimension == 3 ? 31 : 1 };
   const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
   auto image = stmTest::MakeLabelImage(dims, spacing, origin,
@@ -299,6 +302,13 @@ TEST_P(SyntheticPipeline, QualityWithinObservedBounds)
     EXPECT_NEAR(smallest, bound.Angle, 5e-3) << "L = 1 meshes are made of the best shapes only";
   }
 }
+
+// An unbalanced tree has no level-specific bound.
+INSTANTIATE_TEST_SUITE_P(DimensionsAndBalance, BalancedQuality,
+  ::testing::Values(Case{ 2, 1, 0 }, Case{ 2, 2, 0 }, Case{ 2, 3, 0 }, Case{ 2, 1, 1 },
+    Case{ 3, 1, 0 }, Case{ 3, 2, 0 }, Case{ 3, 3, 0 }, Case{ 3, 1, 1 }, Case{ 3, 2, 1 },
+    Case{ 3, 3, 1 }),
+  CaseName);
 
 TEST(SpacetreePipeline, BalanceOnlyRefinesAndKeepsMaterials)
 {
@@ -676,6 +686,46 @@ TEST_P(AalAtlas, ValidExactMesh)
   if (GetParam() > 0)
   {
     EXPECT_LE(MaxNeighbourLevelDifference(pipeline.Balance->GetOutput(), false), GetParam());
+  }
+}
+
+/// 2D: axial slices of the atlas give valid triangle meshes with exact areas per label.
+TEST_P(AalAtlas, AxialSlicesGiveValidExactMeshes)
+{
+  if (!std::ifstream(AalPath).good())
+  {
+    GTEST_SKIP() << AalPath << " is missing; install Debian's mricron-data";
+  }
+  for (int z : { 45, 90, 120 })
+  {
+    vtkNew<vtkExtractVOI> slice;
+    slice->SetInputConnection(Reader->GetOutputPort());
+    slice->SetVOI(0, 180, 0, 216, z, z);
+    slice->Update();
+    vtkImageData* image = slice->GetOutput();
+    stmTest::Pipeline pipeline;
+    vtkUnstructuredGrid* mesh = pipeline.Run(image, GetParam());
+    for (vtkIdType cell = 0; cell < mesh->GetNumberOfCells(); ++cell)
+    {
+      ASSERT_EQ(mesh->GetCellType(cell), VTK_TRIANGLE);
+    }
+    const int axes[2] = { 0, 1 };
+    const auto report = stmTest::CheckMesh<2>(mesh, axes, 1e-6);
+    EXPECT_TRUE(report.IsValid()) << "slice " << z << ": " << report.Summary();
+    auto counts = stmTest::CountLabels(image);
+    counts.erase(0);
+    ASSERT_EQ(report.VolumePerMaterial.size(), counts.size()) << "slice " << z;
+    for (const auto& entry : counts)
+    {
+      EXPECT_EQ(report.VolumePerMaterial.at(entry.first), static_cast<double>(entry.second))
+        << "slice " << z << ", label " << entry.first;
+    }
+    const double spacing[3] = { 1, 1, 1 };
+    EXPECT_EQ(report.BoundaryMeasure, VoxelBoundaryMeasure(image, 2, spacing)) << "slice " << z;
+    if (GetParam() > 0)
+    {
+      EXPECT_LE(MaxNeighbourLevelDifference(pipeline.Balance->GetOutput(), false), GetParam());
+    }
   }
 }
 
