@@ -9,13 +9,13 @@
 #include "stmImageToSpacetree.h"
 #include "stmSpacetreeBalance.h"
 #include "stmSpacetreeTessellate.h"
+#include "stmVerdictQuality.h"
 
 #include "vtkCellData.h"
 #include "vtkDataArray.h"
 #include "vtkExtractVOI.h"
 #include "vtkIdList.h"
 #include "vtkImageData.h"
-#include "vtkMeshQuality.h"
 #include "vtkNIFTIImageReader.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
@@ -117,22 +117,9 @@ Quality Measure(vtkUnstructuredGrid* mesh)
   {
     return quality;
   }
-  vtkNew<vtkMeshQuality> condition;
-  condition->SetInputData(mesh);
-  condition->SetTetQualityMeasureToCondition();
-  condition->SetTriangleQualityMeasureToCondition();
-  condition->Update();
-  quality.WorstCondition = vtkDataSet::SafeDownCast(condition->GetOutput())
-                             ->GetCellData()
-                             ->GetArray("Quality")
-                             ->GetRange()[1];
-  vtkNew<vtkMeshQuality> angle;
-  angle->SetInputData(mesh);
-  angle->SetTetQualityMeasureToMinAngle();
-  angle->SetTriangleQualityMeasureToMinAngle();
-  angle->Update();
-  quality.SmallestAngle =
-    vtkDataSet::SafeDownCast(angle->GetOutput())->GetCellData()->GetArray("Quality")->GetRange()[0];
+  const stmTest::VerdictQualityRange range = stmTest::MeasureVerdictQuality(mesh);
+  quality.WorstCondition = range.WorstCondition;
+  quality.SmallestAngle = range.SmallestAngle;
   quality.Shapes = CountShapes(mesh);
   return quality;
 }

@@ -4,6 +4,7 @@
 // label, balance, file round trips, thread-count determinism and bad input.
 
 #include "stmFilterTestUtilities.h"
+#include "stmVerdictQuality.h"
 
 #include "vtkCallbackCommand.h"
 #include "vtkCommand.h"
@@ -14,7 +15,6 @@
 #include "vtkFloatArray.h"
 #include "vtkIntArray.h"
 #include "vtkMatrix3x3.h"
-#include "vtkMeshQuality.h"
 #include "vtkNIFTIImageReader.h"
 #include "vtkPolyData.h"
 #include "vtkSMPTools.h"
@@ -278,22 +278,9 @@ TEST_P(BalancedQuality, WithinObservedBounds)
   const Bound bound = c.Dimension == 2 ? bounds2D[c.BalanceLevel - 1]
     : c.CellTemplate == 0              ? checkerboard3D[c.BalanceLevel - 1]
                                        : kuhn3D[c.BalanceLevel - 1];
-  vtkNew<vtkMeshQuality> condition;
-  condition->SetInputData(mesh);
-  condition->SetTetQualityMeasureToCondition();
-  condition->SetTriangleQualityMeasureToCondition();
-  condition->Update();
-  const double worst = vtkDataSet::SafeDownCast(condition->GetOutput())
-                         ->GetCellData()
-                         ->GetArray("Quality")
-                         ->GetRange()[1];
-  vtkNew<vtkMeshQuality> angle;
-  angle->SetInputData(mesh);
-  angle->SetTetQualityMeasureToMinAngle();
-  angle->SetTriangleQualityMeasureToMinAngle();
-  angle->Update();
-  const double smallest =
-    vtkDataSet::SafeDownCast(angle->GetOutput())->GetCellData()->GetArray("Quality")->GetRange()[0];
+  const stmTest::VerdictQualityRange range = stmTest::MeasureVerdictQuality(mesh);
+  const double worst = range.WorstCondition;
+  const double smallest = range.SmallestAngle;
   // The bounds are printed rounded to 3 decimals (condition) and 2 (angle).
   EXPECT_LE(worst, bound.Condition + 5e-4);
   EXPECT_GE(smallest, bound.Angle - 5e-3);
