@@ -110,6 +110,65 @@ bool GetDoubles(vtkFieldData* fd, const char* name, int count, double* values, s
   }
   return true;
 }
+/// Reads the geometry (and so the dimension) from the field data of a spacetree dataset.
+bool ReadGeometry(vtkFieldData* fd, stmSpacetreeGeometry& geometry, std::string& error)
+{
+  std::vector<long long> ints;
+  if (!GetInts(fd, DimensionName, 1, ints, error))
+  {
+    return false;
+  }
+  if (ints[0] != 2 && ints[0] != 3)
+  {
+    error = "the spacetree's dimension must be 2 or 3, got " + std::to_string(ints[0]);
+    return false;
+  }
+  geometry.Dimension = static_cast<int>(ints[0]);
+  if (!GetInts(fd, ImageAxesName, geometry.Dimension, ints, error))
+  {
+    return false;
+  }
+  for (int i = 0; i < geometry.Dimension; ++i)
+  {
+    if (ints[i] < 0 || ints[i] > 2 || (i > 0 && ints[i] <= ints[i - 1]))
+    {
+      error = "the spacetree's image axes must be increasing and within 0..2";
+      return false;
+    }
+    geometry.ImageAxes[i] = static_cast<int>(ints[i]);
+  }
+  double axes[9];
+  if (!GetDoubles(fd, OriginName, 3, geometry.Origin, error) ||
+    !GetDoubles(fd, AxisVectorsName, 9, axes, error))
+  {
+    return false;
+  }
+  for (int i = 0; i < 9; ++i)
+  {
+    geometry.AxisVectors[i / 3][i % 3] = axes[i];
+  }
+  // The spanned axes must be independent, or every element would be flat.
+  const double* u = geometry.AxisVectors[geometry.ImageAxes[0]];
+  const double* v = geometry.AxisVectors[geometry.ImageAxes[1]];
+  const double cross[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+    u[0] * v[1] - u[1] * v[0] };
+  double measure = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+  double scale = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) *
+    std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  if (geometry.Dimension == 3)
+  {
+    const double* w = geometry.AxisVectors[geometry.ImageAxes[2]];
+    measure = std::abs(cross[0] * w[0] + cross[1] * w[1] + cross[2] * w[2]);
+    scale *= std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+  }
+  if (!(measure > 1e-12 * scale) || !(scale > 0))
+  {
+    error = "the spacetree's lattice axes are degenerate (zero or parallel voxel edges)";
+    return false;
+  }
+  return true;
+}
+
 } // namespace
 
 namespace stmSpacetreeData
@@ -168,64 +227,6 @@ void RemoveSpacetreeFieldData(vtkFieldData* fieldData)
   {
     fieldData->RemoveArray(name);
   }
-}
-
-bool ReadGeometry(vtkFieldData* fd, stmSpacetreeGeometry& geometry, std::string& error)
-{
-  std::vector<long long> ints;
-  if (!GetInts(fd, DimensionName, 1, ints, error))
-  {
-    return false;
-  }
-  if (ints[0] != 2 && ints[0] != 3)
-  {
-    error = "the spacetree's dimension must be 2 or 3, got " + std::to_string(ints[0]);
-    return false;
-  }
-  geometry.Dimension = static_cast<int>(ints[0]);
-  if (!GetInts(fd, ImageAxesName, geometry.Dimension, ints, error))
-  {
-    return false;
-  }
-  for (int i = 0; i < geometry.Dimension; ++i)
-  {
-    if (ints[i] < 0 || ints[i] > 2 || (i > 0 && ints[i] <= ints[i - 1]))
-    {
-      error = "the spacetree's image axes must be increasing and within 0..2";
-      return false;
-    }
-    geometry.ImageAxes[i] = static_cast<int>(ints[i]);
-  }
-  double axes[9];
-  if (!GetDoubles(fd, OriginName, 3, geometry.Origin, error) ||
-    !GetDoubles(fd, AxisVectorsName, 9, axes, error))
-  {
-    return false;
-  }
-  for (int i = 0; i < 9; ++i)
-  {
-    geometry.AxisVectors[i / 3][i % 3] = axes[i];
-  }
-  // The spanned axes must be independent, or every element would be flat.
-  const double* u = geometry.AxisVectors[geometry.ImageAxes[0]];
-  const double* v = geometry.AxisVectors[geometry.ImageAxes[1]];
-  const double cross[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
-    u[0] * v[1] - u[1] * v[0] };
-  double measure = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
-  double scale = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) *
-    std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-  if (geometry.Dimension == 3)
-  {
-    const double* w = geometry.AxisVectors[geometry.ImageAxes[2]];
-    measure = std::abs(cross[0] * w[0] + cross[1] * w[1] + cross[2] * w[2]);
-    scale *= std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-  }
-  if (!(measure > 1e-12 * scale) || !(scale > 0))
-  {
-    error = "the spacetree's lattice axes are degenerate (zero or parallel voxel edges)";
-    return false;
-  }
-  return true;
 }
 
 namespace

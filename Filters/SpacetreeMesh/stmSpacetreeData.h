@@ -68,9 +68,6 @@ int EndRequest(
 /// Removes the spacetree's field arrays (a mesh is not a spacetree).
 void RemoveSpacetreeFieldData(vtkFieldData* fieldData);
 
-/// Reads the geometry (and so the dimension) from the field data of a spacetree dataset.
-bool ReadGeometry(vtkFieldData* fieldData, stmSpacetreeGeometry& geometry, std::string& error);
-
 /// Rebuilds the core spacetree; false with a message if anything is missing or inconsistent.
 template <int Dim>
 bool ReadSpacetree(vtkUnstructuredGrid* input, stm::Spacetree<Dim>& tree, std::string& error);

@@ -122,11 +122,6 @@ public:
     }
   }
 
-  std::size_t GetMemorySize() const
-  {
-    return static_cast<std::size_t>(this->NumberOfWords) * 8 + this->WordRank.size() * 8;
-  }
-
 private:
   LatticeIndex<Dim> Dimensions{};
   std::int64_t NumberOfBits = 0;

@@ -33,7 +33,6 @@ public:
     // touches the memory from the threads that will use it).
     this->Levels.reset(new std::uint8_t[static_cast<std::size_t>(cells)]);
     this->Materials.reset(new MaterialIndex[static_cast<std::size_t>(cells)]);
-    this->NumberOfCells = cells;
 
     struct FillKernel
     {
@@ -169,8 +168,6 @@ public:
     return Status::Ok();
   }
 
-  std::size_t GetMemorySize() const { return static_cast<std::size_t>(this->NumberOfCells) * 3; }
-
 private:
   void CollectNode(const LatticeIndex<Dim>& anchor, int level, Spacetree<Dim>& out) const
   {
@@ -216,7 +213,6 @@ private:
   int MaxLevel = 0;
   LatticeIndex<Dim> RootGridDimensions{};
   LatticeIndex<Dim> Dimensions{};
-  std::int64_t NumberOfCells = 0;
   std::unique_ptr<std::uint8_t[]> Levels;
   std::unique_ptr<MaterialIndex[]> Materials;
 };

@@ -262,14 +262,6 @@ public:
     }
   }
 
-  const LatticeBitset<Dim>& GetVertexSet() const { return this->VertexSet; }
-
-  std::size_t GetMemorySize() const
-  {
-    return this->VertexSet.GetMemorySize() + this->PointSet.GetMemorySize() +
-      this->SimplexOffsets.size() * sizeof(std::int64_t);
-  }
-
 private:
   /// Tabulates the template of a regular cell for both anchor parities, oriented once, so
   /// that regular leaves (most of them) skip the recursion and the determinants.
