@@ -3,6 +3,7 @@
 // dimension fails the build rather than a later user.
 
 #include "Balance/SpacetreeBalance.h"
+#include "Balance/SpacetreeGrading.h"
 #include "Check/MeshInvariants.h"
 #include "Spacetree/SpacetreeBuild.h"
 #include "Tessellate/SpacetreeTessellation.h"
@@ -30,7 +31,8 @@ void InstantiatePipeline()
   SequentialExecutor executor;
   MaterialImage<Dim> image;
   Spacetree<Dim> tree;
-  SpacetreeBuilder<Dim>().Build(image, { 0 }, SpacetreeBuildOptions(), tree, executor);
+  SpacetreeBuilder<Dim>().Build(image, { 0 }, RefinementPlanOptions<Dim>(), tree, executor);
+  SpacetreeGrader<Dim>().Grade(tree, 2.0, RefinementPlanOptions<Dim>::UnitSpacing(), executor);
   SpacetreeBalancer<Dim>().Balance(tree, SpacetreeBalanceOptions(), executor);
   SpacetreeTessellator<Dim> tessellator;
   tessellator.Prepare(tree, SpacetreeTessellationOptions(), executor);

@@ -3,8 +3,12 @@
 #define stmCoreSpacetreeBalance_h
 
 // Balancing (paper section 2.2): refine leaves until no two adjacent leaves differ by more than
-// BalanceLevel levels. Adjacent means sharing a facet, or with FaceBalanceOnly unset, sharing
-// any vertex. Balancing only splits leaves; it never coarsens and never changes a material.
+// L levels. Adjacent means sharing a facet, or with FaceBalanceOnly unset, sharing any vertex.
+// Balancing only splits leaves; it never coarsens and never changes a material.
+//
+// L may vary in space: every leaf has a local balance level (the region's inside a region, else
+// its material's if one is given, else BalanceLevel), and two adjacent leaves must satisfy the
+// smaller of their two levels.
 //
 // Leaves are processed from the finest level to the coarsest. A leaf of level l forces every
 // adjacent leaf to level >= l - L; the leaves this creates have levels <= l - L < l and are
@@ -19,6 +23,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <mutex>
 #include <string>
 #include <utility>
@@ -33,6 +38,55 @@ struct SpacetreeBalanceOptions
   int BalanceLevel = 1;
   /// Only leaves that share a facet count as adjacent.
   bool FaceBalanceOnly = false;
+  /// Balance level of the leaves of each material index; 0 (or a missing entry) means
+  /// BalanceLevel.
+  std::vector<int> MaterialBalanceLevels;
+  /// If set, the balance level at a leaf centre (given in lattice units, Dim values), or 0 where
+  /// no region applies; it overrides the material's.
+  std::function<int(const double* centre)> RegionBalanceLevel;
+
+  /// The local balance level of a leaf.
+  template <int Dim>
+  int LocalLevel(const LatticeIndex<Dim>& anchor, const LatticeIndex<Dim>& size,
+    MaterialIndex material) const
+  {
+    if (this->RegionBalanceLevel)
+    {
+      double centre[Dim];
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        centre[axis] = anchor[axis] + 0.5 * size[axis];
+      }
+      const int regional = this->RegionBalanceLevel(centre);
+      if (regional > 0)
+      {
+        return regional;
+      }
+    }
+    if (material < this->MaterialBalanceLevels.size() && this->MaterialBalanceLevels[material] > 0)
+    {
+      return this->MaterialBalanceLevels[material];
+    }
+    return this->BalanceLevel;
+  }
+
+  bool HasLocalLevels() const
+  {
+    return static_cast<bool>(this->RegionBalanceLevel) ||
+      std::any_of(this->MaterialBalanceLevels.begin(), this->MaterialBalanceLevels.end(),
+        [](int level) { return level > 0; });
+  }
+
+  /// The smallest balance level any leaf can have (regions aside).
+  int SmallestLevel() const
+  {
+    int smallest = this->BalanceLevel;
+    for (int level : this->MaterialBalanceLevels)
+    {
+      smallest = level > 0 ? std::min(smallest, level) : smallest;
+    }
+    return this->RegionBalanceLevel ? 1 : smallest;
+  }
 };
 
 /// The neighbour directions of a cell, each component in {-1, 0, 1}; all 3^Dim - 1 of them,
@@ -64,23 +118,31 @@ std::vector<LatticeIndex<Dim>> NeighborDirections(bool facetsOnly)
 template <int Dim>
 class SpacetreeBalancer
 {
+  /// A cell that must lie in a leaf fine enough for a neighbour of the given level and local
+  /// balance level.
+  struct Request
+  {
+    LatticeIndex<Dim> Sample;
+    int Level;
+    int LocalLevel;
+  };
+
   /// Finds, for the leaves of one level, the neighbouring cells that lie in too coarse a leaf.
   struct ScanKernel
   {
     using Scratch = NoScratch;
     const LevelMap<Dim>* Map;
+    const SpacetreeBalanceOptions* Options;
     const std::vector<LatticeIndex<Dim>>* Leaves;
     const std::vector<LatticeIndex<Dim>>* Directions;
     int Level;
-    int CoarsestAllowed;
-    std::int64_t Size;
-    /// (first leaf of the range, cells found), one entry per range.
-    mutable std::vector<std::pair<std::int64_t, std::vector<LatticeIndex<Dim>>>> Found;
+    /// (first leaf of the range, requests found), one entry per range.
+    mutable std::vector<std::pair<std::int64_t, std::vector<Request>>> Found;
     mutable std::mutex FoundLock;
 
     void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
     {
-      std::vector<LatticeIndex<Dim>> found;
+      std::vector<Request> found;
       for (std::int64_t i = begin; i < end; ++i)
       {
         const LatticeIndex<Dim>& anchor = (*this->Leaves)[i];
@@ -88,6 +150,9 @@ class SpacetreeBalancer
         {
           continue; // split since it was queued
         }
+        const LatticeIndex<Dim>& size = this->Map->CellSize(this->Level);
+        const int leafLevel =
+          this->Options->template LocalLevel<Dim>(anchor, size, this->Map->MaterialAt(anchor));
         for (const auto& direction : *this->Directions)
         {
           LatticeIndex<Dim> sample;
@@ -95,13 +160,13 @@ class SpacetreeBalancer
           for (int axis = 0; axis < Dim; ++axis)
           {
             sample[axis] = direction[axis] < 0 ? anchor[axis] - 1
-              : direction[axis] > 0            ? anchor[axis] + this->Size
+              : direction[axis] > 0            ? anchor[axis] + size[axis]
                                                : anchor[axis];
             inside = inside && sample[axis] >= 0 && sample[axis] < this->Map->GetDimensions()[axis];
           }
-          if (inside && this->Map->LevelAt(sample) < this->CoarsestAllowed)
+          if (inside && IsTooCoarse(*this->Map, *this->Options, sample, this->Level, leafLevel))
           {
-            found.push_back(sample);
+            found.push_back(Request{ sample, this->Level, leafLevel });
           }
         }
       }
@@ -112,12 +177,12 @@ class SpacetreeBalancer
       }
     }
 
-    /// The cells found, in leaf order whatever the order in which the ranges ran.
-    std::vector<LatticeIndex<Dim>> TakeFound() const
+    /// The requests found, in leaf order whatever the order in which the ranges ran.
+    std::vector<Request> TakeFound() const
     {
       std::sort(this->Found.begin(), this->Found.end(),
         [](const auto& x, const auto& y) { return x.first < y.first; });
-      std::vector<LatticeIndex<Dim>> all;
+      std::vector<Request> all;
       for (auto& range : this->Found)
       {
         all.insert(all.end(), range.second.begin(), range.second.end());
@@ -127,6 +192,25 @@ class SpacetreeBalancer
     }
   };
 
+  /// Whether the leaf containing the sample cell is too coarse next to a leaf of the given level
+  /// and local balance level.
+  static bool IsTooCoarse(const LevelMap<Dim>& map, const SpacetreeBalanceOptions& options,
+    const LatticeIndex<Dim>& sample, int level, int localLevel)
+  {
+    const int neighborLevel = map.LevelAt(sample);
+    if (neighborLevel >= level - 1)
+    {
+      return false; // the common case: every balance level is at least 1
+    }
+    if (!options.HasLocalLevels())
+    {
+      return neighborLevel < level - localLevel;
+    }
+    const int neighborLocal = options.LocalLevel<Dim>(map.AnchorOf(sample, neighborLevel),
+      map.CellSize(neighborLevel), map.MaterialAt(sample));
+    return neighborLevel < level - std::min(localLevel, neighborLocal);
+  }
+
 public:
   template <class Executor>
   Status Balance(Spacetree<Dim>& tree, const SpacetreeBalanceOptions& options, Executor& executor)
@@ -135,6 +219,13 @@ public:
     {
       return Status::Invalid(
         "BalanceLevel must be at least 1, got " + std::to_string(options.BalanceLevel));
+    }
+    for (int level : options.MaterialBalanceLevels)
+    {
+      if (level < 0)
+      {
+        return Status::Invalid("material balance levels must be at least 1 (or 0 for the default)");
+      }
     }
     LevelMap<Dim> map;
     Status status = map.Build(tree, executor);
@@ -149,9 +240,9 @@ public:
       leavesByLevel[tree.LeafLevels[leaf]].push_back(tree.LeafAnchors[leaf]);
     }
     const auto directions = NeighborDirections<Dim>(options.FaceBalanceOnly);
-    const int L = options.BalanceLevel;
+    const int smallest = options.SmallestLevel();
 
-    for (int level = tree.MaxLevel; level > L; --level)
+    for (int level = tree.MaxLevel; level > smallest; --level)
     {
       if (executor.ShouldAbort())
       {
@@ -162,27 +253,18 @@ public:
       // idempotent ("until the sample cell is fine enough"), so the result does not depend on
       // the order of the requests, nor on the number of threads.
       auto& leaves = leavesByLevel[level];
-      ScanKernel scan{ &map, &leaves, &directions, level, level - L, tree.GetCellSize(level), {},
-        {} };
+      ScanKernel scan{ &map, &options, &leaves, &directions, level, {}, {} };
       executor.For(0, static_cast<std::int64_t>(leaves.size()), 4096, scan);
-      const std::vector<LatticeIndex<Dim>> requests = scan.TakeFound();
-      for (const LatticeIndex<Dim>& sample : requests)
+      const std::vector<Request> requests = scan.TakeFound();
+      for (const Request& request : requests)
       {
-        for (int neighborLevel = map.LevelAt(sample); neighborLevel < level - L;
-             neighborLevel = map.LevelAt(sample))
+        while (IsTooCoarse(map, options, request.Sample, request.Level, request.LocalLevel))
         {
-          const LatticeIndex<Dim> neighborAnchor = map.AnchorOf(sample, neighborLevel);
+          const int neighborLevel = map.LevelAt(request.Sample);
+          const LatticeIndex<Dim> neighborAnchor = map.AnchorOf(request.Sample, neighborLevel);
           map.Split(neighborAnchor, neighborLevel);
-          const std::int64_t half = tree.GetCellSize(neighborLevel + 1);
-          for (int child = 0; child < CubeInfo<Dim>::VerticesPerCell; ++child)
-          {
-            LatticeIndex<Dim> childAnchor = neighborAnchor;
-            for (int axis = 0; axis < Dim; ++axis)
-            {
-              childAnchor[axis] += ((child >> axis) & 1) * half;
-            }
-            leavesByLevel[neighborLevel + 1].push_back(childAnchor);
-          }
+          tree.ForEachChild(neighborAnchor, neighborLevel,
+            [&](const LatticeIndex<Dim>& child) { leavesByLevel[neighborLevel + 1].push_back(child); });
         }
       }
       leaves.clear();
@@ -194,12 +276,57 @@ public:
     {
       return status;
     }
-    tree.BalanceLevel = L;
+    tree.BalanceLevel = options.BalanceLevel;
     tree.FaceBalanceOnly = options.FaceBalanceOnly;
     executor.ReportProgress(1.0);
     return Status::Ok();
   }
 };
+
+/// Calls visit(cell) for every lattice cell outside a leaf that touches it (over a facet, or
+/// over any face unless facetsOnly), within the lattice.
+template <int Dim, class Visitor>
+void ForEachAdjacentCell(const Spacetree<Dim>& tree, const LevelMap<Dim>& map, std::int64_t leaf,
+  const std::vector<LatticeIndex<Dim>>& directions, Visitor&& visit)
+{
+  const LatticeIndex<Dim>& size = tree.GetCellSize(tree.LeafLevels[leaf]);
+  const auto& anchor = tree.LeafAnchors[leaf];
+  for (const auto& direction : directions)
+  {
+    LatticeIndex<Dim> lo, hi;
+    bool inside = true;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      lo[axis] = direction[axis] < 0 ? anchor[axis] - 1
+        : direction[axis] > 0        ? anchor[axis] + size[axis]
+                                     : anchor[axis];
+      hi[axis] = direction[axis] == 0 ? anchor[axis] + size[axis] : lo[axis] + 1;
+      inside = inside && lo[axis] >= 0 && hi[axis] <= map.GetDimensions()[axis];
+    }
+    if (!inside)
+    {
+      continue;
+    }
+    LatticeIndex<Dim> cell = lo;
+    for (;;)
+    {
+      visit(static_cast<const LatticeIndex<Dim>&>(cell));
+      int axis = 0;
+      for (; axis < Dim; ++axis)
+      {
+        if (++cell[axis] < hi[axis])
+        {
+          break;
+        }
+        cell[axis] = lo[axis];
+      }
+      if (axis == Dim)
+      {
+        break;
+      }
+    }
+  }
+}
 
 /// The largest level difference between adjacent leaves; 0 for a uniform tree.
 template <int Dim, class Executor>
@@ -215,50 +342,44 @@ int MaximumLevelDifference(const Spacetree<Dim>& tree, bool facetsOnly, Executor
   for (std::int64_t leaf = 0; leaf < tree.GetNumberOfLeaves(); ++leaf)
   {
     const int level = tree.LeafLevels[leaf];
-    const std::int64_t size = tree.GetCellSize(level);
-    const auto& anchor = tree.LeafAnchors[leaf];
-    for (const auto& direction : directions)
-    {
-      // Every leaf touching this side: walk the lattice cells along the shared face.
-      LatticeIndex<Dim> lo, hi;
-      for (int axis = 0; axis < Dim; ++axis)
-      {
-        lo[axis] = direction[axis] < 0 ? anchor[axis] - 1
-          : direction[axis] > 0        ? anchor[axis] + size
-                                       : anchor[axis];
-        hi[axis] = direction[axis] == 0 ? anchor[axis] + size : lo[axis] + 1;
-      }
-      bool inside = true;
-      for (int axis = 0; axis < Dim; ++axis)
-      {
-        inside = inside && lo[axis] >= 0 && hi[axis] <= map.GetDimensions()[axis];
-      }
-      if (!inside)
-      {
-        continue;
-      }
-      LatticeIndex<Dim> cell = lo;
-      for (;;)
+    ForEachAdjacentCell<Dim>(tree, map, leaf, directions,
+      [&](const LatticeIndex<Dim>& cell)
       {
         const int difference = map.LevelAt(cell) - level;
         worst = std::max(worst, difference < 0 ? -difference : difference);
-        int axis = 0;
-        for (; axis < Dim; ++axis)
-        {
-          if (++cell[axis] < hi[axis])
-          {
-            break;
-          }
-          cell[axis] = lo[axis];
-        }
-        if (axis == Dim)
-        {
-          break;
-        }
-      }
-    }
+      });
   }
   return worst;
+}
+
+/// The number of (leaf, adjacent lattice cell) pairs whose level difference exceeds the smaller
+/// of the two leaves' local balance levels; 0 for a balanced tree.
+template <int Dim, class Executor>
+std::int64_t CountBalanceViolations(
+  const Spacetree<Dim>& tree, const SpacetreeBalanceOptions& options, Executor& executor)
+{
+  LevelMap<Dim> map;
+  if (!map.Build(tree, executor).IsOk())
+  {
+    return -1;
+  }
+  const auto directions = NeighborDirections<Dim>(options.FaceBalanceOnly);
+  std::int64_t violations = 0;
+  for (std::int64_t leaf = 0; leaf < tree.GetNumberOfLeaves(); ++leaf)
+  {
+    const int level = tree.LeafLevels[leaf];
+    const int local = options.LocalLevel<Dim>(
+      tree.LeafAnchors[leaf], tree.GetCellSize(level), tree.LeafMaterials[leaf]);
+    ForEachAdjacentCell<Dim>(tree, map, leaf, directions,
+      [&](const LatticeIndex<Dim>& cell)
+      {
+        const int neighborLevel = map.LevelAt(cell);
+        const int neighborLocal = options.LocalLevel<Dim>(map.AnchorOf(cell, neighborLevel),
+          map.CellSize(neighborLevel), map.MaterialAt(cell));
+        violations += level - neighborLevel > std::min(local, neighborLocal);
+      });
+  }
+  return violations;
 }
 
 } // namespace stm

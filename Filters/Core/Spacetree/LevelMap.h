@@ -26,6 +26,7 @@ public:
   Status Build(const Spacetree<Dim>& tree, Executor& executor)
   {
     this->MaxLevel = tree.MaxLevel;
+    this->CellSizes = tree.CellSizes;
     this->RootGridDimensions = tree.RootGridDimensions;
     this->Dimensions = tree.GetLatticeDimensions();
     const std::int64_t cells = NumberOfLatticeCells<Dim>(this->Dimensions);
@@ -76,16 +77,16 @@ public:
     return this->Materials[LinearIndex<Dim>(cell, this->Dimensions)];
   }
 
-  std::int64_t CellSize(int level) const { return std::int64_t{ 1 } << (this->MaxLevel - level); }
+  const LatticeIndex<Dim>& CellSize(int level) const { return this->CellSizes[level]; }
 
   /// Anchor of the leaf of the given level that contains the cell.
   LatticeIndex<Dim> AnchorOf(const LatticeIndex<Dim>& cell, int level) const
   {
-    const std::int64_t size = this->CellSize(level);
+    const LatticeIndex<Dim>& size = this->CellSize(level);
     LatticeIndex<Dim> anchor;
     for (int axis = 0; axis < Dim; ++axis)
     {
-      anchor[axis] = cell[axis] - cell[axis] % size;
+      anchor[axis] = cell[axis] - cell[axis] % size[axis];
     }
     return anchor;
   }
@@ -93,11 +94,11 @@ public:
   /// Marks the region of a leaf as covered by a leaf of this level and material.
   void Fill(const LatticeIndex<Dim>& anchor, int level, MaterialIndex material)
   {
-    const std::int64_t size = this->CellSize(level);
+    const LatticeIndex<Dim>& size = this->CellSize(level);
     this->ForEachRow(anchor, size,
       [&](std::int64_t rowStart)
       {
-        for (std::int64_t i = 0; i < size; ++i)
+        for (std::int64_t i = 0; i < size[0]; ++i)
         {
           this->Levels[rowStart + i] = static_cast<std::uint8_t>(level);
           this->Materials[rowStart + i] = material;
@@ -105,14 +106,14 @@ public:
       });
   }
 
-  /// Splits the leaf (level, anchor) into its 2^Dim children; the children keep its material.
+  /// Splits the leaf (level, anchor) into its children; the children keep its material.
   void Split(const LatticeIndex<Dim>& anchor, int level)
   {
-    const std::int64_t size = this->CellSize(level);
+    const LatticeIndex<Dim>& size = this->CellSize(level);
     this->ForEachRow(anchor, size,
       [&](std::int64_t rowStart)
       {
-        for (std::int64_t i = 0; i < size; ++i)
+        for (std::int64_t i = 0; i < size[0]; ++i)
         {
           this->Levels[rowStart + i] = static_cast<std::uint8_t>(level + 1);
         }
@@ -138,7 +139,8 @@ public:
           std::int64_t rest = root;
           for (int axis = 0; axis < Dim; ++axis)
           {
-            anchor[axis] = (rest % this->Map->RootGridDimensions[axis]) * this->Map->CellSize(0);
+            anchor[axis] =
+              (rest % this->Map->RootGridDimensions[axis]) * this->Map->CellSize(0)[axis];
             rest /= this->Map->RootGridDimensions[axis];
           }
           this->Map->CollectNode(anchor, 0, (*this->PerRoot)[root]);
@@ -159,11 +161,7 @@ public:
     tree.ReserveLeaves(total);
     for (const auto& part : perRoot)
     {
-      tree.LeafLevels.insert(tree.LeafLevels.end(), part.LeafLevels.begin(), part.LeafLevels.end());
-      tree.LeafAnchors.insert(
-        tree.LeafAnchors.end(), part.LeafAnchors.begin(), part.LeafAnchors.end());
-      tree.LeafMaterials.insert(
-        tree.LeafMaterials.end(), part.LeafMaterials.begin(), part.LeafMaterials.end());
+      tree.AppendLeaves(part);
     }
     return Status::Ok();
   }
@@ -176,26 +174,19 @@ private:
       out.AddLeaf(level, anchor, this->MaterialAt(anchor));
       return;
     }
-    const std::int64_t half = this->CellSize(level + 1);
-    for (int child = 0; child < CubeInfo<Dim>::VerticesPerCell; ++child)
-    {
-      LatticeIndex<Dim> childAnchor = anchor;
-      for (int axis = 0; axis < Dim; ++axis)
-      {
-        childAnchor[axis] += ((child >> axis) & 1) * half;
-      }
-      this->CollectNode(childAnchor, level + 1, out);
-    }
+    Spacetree<Dim>::VisitChildren(this->CellSizes, anchor, level,
+      [&](const LatticeIndex<Dim>& child) { this->CollectNode(child, level + 1, out); });
   }
 
-  /// Calls rowStart(linearIndexOfFirstCell) for every axis-0 row of a cube region.
+  /// Calls row(linearIndexOfFirstCell) for every axis-0 row of a box region.
   template <class RowFunction>
-  void ForEachRow(const LatticeIndex<Dim>& anchor, std::int64_t size, RowFunction&& row) const
+  void ForEachRow(
+    const LatticeIndex<Dim>& anchor, const LatticeIndex<Dim>& size, RowFunction&& row) const
   {
     std::int64_t rows = 1;
     for (int axis = 1; axis < Dim; ++axis)
     {
-      rows *= size;
+      rows *= size[axis];
     }
     for (std::int64_t r = 0; r < rows; ++r)
     {
@@ -203,14 +194,15 @@ private:
       std::int64_t rest = r;
       for (int axis = 1; axis < Dim; ++axis)
       {
-        cell[axis] += rest % size;
-        rest /= size;
+        cell[axis] += rest % size[axis];
+        rest /= size[axis];
       }
       row(LinearIndex<Dim>(cell, this->Dimensions));
     }
   }
 
   int MaxLevel = 0;
+  std::vector<LatticeIndex<Dim>> CellSizes;
   LatticeIndex<Dim> RootGridDimensions{};
   LatticeIndex<Dim> Dimensions{};
   std::unique_ptr<std::uint8_t[]> Levels;

@@ -4,11 +4,14 @@
 
 // The spacetree S = (I_0, ..., I_k) of the paper (section 2.1), stored as its leaves.
 //
-// Lattice units: the edge of the finest possible cell, which is one voxel. A leaf at level l
-// is a Dim-cube of edge 2^(MaxLevel - l) lattice units whose lower corner (its anchor) is a
-// multiple of that edge. Level 0 cells form the root grid I_0, which covers the image and is
-// padded with background where the image does not fill it. The leaves partition the root grid,
-// so the leaf list alone determines the tree.
+// Lattice units: the edge of the finest possible cell along each axis. A voxel spans
+// VoxelSubdivision[axis] lattice units (1 unless cells are refined below the voxel). A cell of
+// level l spans CellSizes[l][axis] lattice units along each axis; every level's edges divide
+// the coarser level's, so a cell of level l splits into CellSizes[l] / CellSizes[l + 1]
+// children per axis (the refinement pattern of that level: 2^d, 3^d, 2x2x1, ...). A leaf's
+// lower corner (its anchor) is a multiple of its edges. Level 0 cells form the root grid I_0,
+// which covers the image and is padded with background where the image does not fill it. The
+// leaves partition the root grid, so the leaf list and the level table determine the tree.
 //
 // Materials are small indices into MaterialLabels. Index 0 is the background: every voxel
 // outside the body of interest and all padding. Every leaf is homogeneous: all voxels it
@@ -25,14 +28,24 @@ namespace stm
 using MaterialIndex = std::uint16_t;
 constexpr MaterialIndex BackgroundMaterial = 0;
 
+/// Largest number of levels below the root the lattice arithmetic supports.
+constexpr int MaximumSupportedLevel = 20;
+
+/// Largest split count of one axis in one level of a refinement pattern.
+constexpr int MaximumSplitCount = 8;
+
 template <int Dim>
 class Spacetree
 {
 public:
   /// Root cells per axis.
   LatticeIndex<Dim> RootGridDimensions{};
-  /// The finest level; root cells have edge 2^MaxLevel lattice units.
+  /// The finest level.
   int MaxLevel = 0;
+  /// Edges of the cells of each level in lattice units, levels 0 (root) to MaxLevel.
+  std::vector<LatticeIndex<Dim>> CellSizes{ UnitSize() };
+  /// Lattice units per voxel along each axis.
+  LatticeIndex<Dim> VoxelSubdivision = UnitSize();
   /// Voxels of the source image per axis; cells beyond it are padding.
   LatticeIndex<Dim> ImageDimensions{};
   /// Label value of each material index; entry 0 is the background label.
@@ -43,21 +56,90 @@ public:
   bool FaceBalanceOnly = false;
 
   // The leaves, structure of arrays, in canonical order: root cells in linear order, and
-  // inside each root cell depth first with children in linear order (a Morton order).
+  // inside each root cell depth first with children in linear order (axis 0 fastest).
   std::vector<std::uint8_t> LeafLevels;
   std::vector<LatticeIndex<Dim>> LeafAnchors;
   std::vector<MaterialIndex> LeafMaterials;
+
+  static LatticeIndex<Dim> UnitSize()
+  {
+    LatticeIndex<Dim> unit;
+    unit.fill(1);
+    return unit;
+  }
+
+  /// The level table of 2^Dim refinement with maxLevel levels below the root: a level-l cell
+  /// has edge 2^(maxLevel - l) on every axis.
+  static std::vector<LatticeIndex<Dim>> UniformCellSizes(int maxLevel)
+  {
+    std::vector<LatticeIndex<Dim>> sizes(static_cast<std::size_t>(maxLevel) + 1);
+    for (int level = 0; level <= maxLevel; ++level)
+    {
+      sizes[level].fill(std::int64_t{ 1 } << (maxLevel - level));
+    }
+    return sizes;
+  }
+
+  /// Sets the level table to 2^Dim refinement with maxLevel levels at voxel resolution.
+  void SetUniformRefinement(int maxLevel)
+  {
+    this->MaxLevel = maxLevel;
+    this->CellSizes = UniformCellSizes(maxLevel);
+    this->VoxelSubdivision = UnitSize();
+  }
 
   std::int64_t GetNumberOfLeaves() const
   {
     return static_cast<std::int64_t>(this->LeafLevels.size());
   }
 
-  std::int64_t GetRootCellSize() const { return std::int64_t{ 1 } << this->MaxLevel; }
+  const LatticeIndex<Dim>& GetCellSize(int level) const { return this->CellSizes[level]; }
+  const LatticeIndex<Dim>& GetRootCellSize() const { return this->CellSizes[0]; }
 
-  std::int64_t GetCellSize(int level) const
+  /// Children per axis of a cell of the given level (< MaxLevel).
+  LatticeIndex<Dim> GetSplitCounts(int level) const
   {
-    return std::int64_t{ 1 } << (this->MaxLevel - level);
+    LatticeIndex<Dim> splits;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      splits[axis] = this->CellSizes[level][axis] / this->CellSizes[level + 1][axis];
+    }
+    return splits;
+  }
+
+  /// Calls visit(childAnchor) for the children of a cell of the given level, in canonical order.
+  template <class Visitor>
+  void ForEachChild(const LatticeIndex<Dim>& anchor, int level, Visitor&& visit) const
+  {
+    VisitChildren(this->CellSizes, anchor, level, visit);
+  }
+
+  /// ForEachChild for a bare level table.
+  template <class Visitor>
+  static void VisitChildren(const std::vector<LatticeIndex<Dim>>& cellSizes,
+    const LatticeIndex<Dim>& anchor, int level, Visitor&& visit)
+  {
+    const LatticeIndex<Dim>& size = cellSizes[level];
+    const LatticeIndex<Dim>& childSize = cellSizes[level + 1];
+    LatticeIndex<Dim> child = anchor;
+    for (;;)
+    {
+      visit(static_cast<const LatticeIndex<Dim>&>(child));
+      int axis = 0;
+      for (; axis < Dim; ++axis)
+      {
+        child[axis] += childSize[axis];
+        if (child[axis] < anchor[axis] + size[axis])
+        {
+          break;
+        }
+        child[axis] = anchor[axis];
+      }
+      if (axis == Dim)
+      {
+        return;
+      }
+    }
   }
 
   /// Lattice cells per axis covered by the root grid.
@@ -66,9 +148,15 @@ public:
     LatticeIndex<Dim> dims;
     for (int axis = 0; axis < Dim; ++axis)
     {
-      dims[axis] = this->RootGridDimensions[axis] * this->GetRootCellSize();
+      dims[axis] = this->RootGridDimensions[axis] * this->CellSizes[0][axis];
     }
     return dims;
+  }
+
+  /// Lattice cells covered by a leaf of the given level.
+  std::int64_t GetCellVolume(int level) const
+  {
+    return NumberOfLatticeCells<Dim>(this->CellSizes[level]);
   }
 
   void ClearLeaves()
@@ -90,6 +178,16 @@ public:
     this->LeafLevels.reserve(count);
     this->LeafAnchors.reserve(count);
     this->LeafMaterials.reserve(count);
+  }
+
+  /// Appends the leaves of another tree with the same level table.
+  void AppendLeaves(const Spacetree& other)
+  {
+    this->LeafLevels.insert(this->LeafLevels.end(), other.LeafLevels.begin(), other.LeafLevels.end());
+    this->LeafAnchors.insert(
+      this->LeafAnchors.end(), other.LeafAnchors.begin(), other.LeafAnchors.end());
+    this->LeafMaterials.insert(
+      this->LeafMaterials.end(), other.LeafMaterials.begin(), other.LeafMaterials.end());
   }
 };
 

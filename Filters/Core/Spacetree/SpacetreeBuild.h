@@ -2,14 +2,16 @@
 #ifndef stmCoreSpacetreeBuild_h
 #define stmCoreSpacetreeBuild_h
 
-// Builds the spacetree of a material image (paper section 2.1): the root grid I_0 is the
-// coarsest grid of power-of-two cells no larger than MaxCellSize that covers the image, and a
-// cell is split into its 2^Dim children while it holds more than one material, so that every
-// material interface is resolved at voxel size.
+// Builds the spacetree of a material image (paper section 2.1) on a level table planned by
+// PlanRefinement: the root grid I_0 covers the image with root cells, and a cell is split into
+// the children of its level's pattern while it holds more than one material (so that every
+// material interface is resolved at voxel size) or while it covers a voxel whose minimum level
+// is finer than the cell (the size criteria: per label, in a region, a sizing field).
 
 #include "../Common/CubeInfo.h"
 #include "../Common/Execution.h"
 #include "../Common/Status.h"
+#include "RefinementPlan.h"
 #include "Spacetree.h"
 
 #include <algorithm>
@@ -28,25 +30,31 @@ struct MaterialImage
   const MaterialIndex* Values = nullptr;
 };
 
-struct SpacetreeBuildOptions
-{
-  /// Largest leaf edge in voxels (>= 1); root cells are the largest power of two not above it.
-  std::int64_t MaxCellSize = 16;
-};
-
-/// Largest level count the lattice arithmetic supports (cell edges up to 2^20 voxels).
-constexpr int MaximumSupportedLevel = 20;
-
 template <int Dim>
 class SpacetreeBuilder
 {
 public:
+  /// Plans the levels from the options and builds the tree with the label criterion only.
   template <class Executor>
   Status Build(const MaterialImage<Dim>& image, const std::vector<std::int64_t>& materialLabels,
-    const SpacetreeBuildOptions& options, Spacetree<Dim>& tree, Executor& executor)
+    const RefinementPlanOptions<Dim>& options, Spacetree<Dim>& tree, Executor& executor)
+  {
+    RefinementPlan<Dim> plan;
+    const Status status = PlanRefinement<Dim>(image.Dimensions, options, plan);
+    if (!status.IsOk())
+    {
+      return status;
+    }
+    return this->Build(image, materialLabels, plan, nullptr, tree, executor);
+  }
+
+  /// minimumLevels, if not null, holds per voxel the coarsest level a leaf covering it may have.
+  template <class Executor>
+  Status Build(const MaterialImage<Dim>& image, const std::vector<std::int64_t>& materialLabels,
+    const RefinementPlan<Dim>& plan, const std::uint8_t* minimumLevels, Spacetree<Dim>& tree,
+    Executor& executor)
   {
     std::int64_t voxels = 1;
-    std::int64_t largestExtent = 1;
     for (int axis = 0; axis < Dim; ++axis)
     {
       if (image.Dimensions[axis] < 1)
@@ -54,7 +62,6 @@ public:
         return Status::Invalid("image dimensions must be positive");
       }
       voxels *= image.Dimensions[axis];
-      largestExtent = std::max<std::int64_t>(largestExtent, image.Dimensions[axis]);
     }
     if (voxels < 2)
     {
@@ -64,38 +71,29 @@ public:
     {
       return Status::Invalid("the material image has no values");
     }
-    if (options.MaxCellSize < 1)
-    {
-      return Status::Invalid(
-        "MaxCellSize must be at least 1 voxel, got " + std::to_string(options.MaxCellSize));
-    }
     if (materialLabels.empty())
     {
       return Status::Invalid("the material table must hold at least the background label");
     }
-
-    // Root cells: as large as MaxCellSize allows, but no larger than needed to cover the image.
-    int maxLevel = 0;
-    while (maxLevel < MaximumSupportedLevel &&
-      (std::int64_t{ 2 } << maxLevel) <= options.MaxCellSize &&
-      (std::int64_t{ 1 } << maxLevel) < largestExtent)
+    if (plan.CellSizes.empty())
     {
-      ++maxLevel;
+      return Status::Invalid("the refinement plan has no levels");
     }
 
     tree = Spacetree<Dim>();
-    tree.MaxLevel = maxLevel;
+    plan.ApplyTo(tree);
     tree.ImageDimensions = image.Dimensions;
     tree.MaterialLabels = materialLabels;
-    const std::int64_t rootSize = tree.GetRootCellSize();
     for (int axis = 0; axis < Dim; ++axis)
     {
-      tree.RootGridDimensions[axis] = (image.Dimensions[axis] + rootSize - 1) / rootSize;
+      const std::int64_t extent = image.Dimensions[axis] * tree.VoxelSubdivision[axis];
+      tree.RootGridDimensions[axis] =
+        (extent + tree.GetRootCellSize()[axis] - 1) / tree.GetRootCellSize()[axis];
     }
 
     const std::int64_t roots = NumberOfLatticeCells<Dim>(tree.RootGridDimensions);
     std::vector<Spacetree<Dim>> perRoot(static_cast<std::size_t>(roots));
-    RefineKernel<Executor> kernel{ &image, &tree, &perRoot, &executor };
+    RefineKernel<Executor> kernel{ &image, &tree, minimumLevels, &perRoot, &executor };
     executor.For(0, roots, 1, kernel);
     if (executor.ShouldAbort())
     {
@@ -118,60 +116,117 @@ public:
     tree.ReserveLeaves(total);
     for (auto& part : perRoot)
     {
-      tree.LeafLevels.insert(tree.LeafLevels.end(), part.LeafLevels.begin(), part.LeafLevels.end());
-      tree.LeafAnchors.insert(
-        tree.LeafAnchors.end(), part.LeafAnchors.begin(), part.LeafAnchors.end());
-      tree.LeafMaterials.insert(
-        tree.LeafMaterials.end(), part.LeafMaterials.begin(), part.LeafMaterials.end());
+      tree.AppendLeaves(part);
       part = Spacetree<Dim>();
     }
     return Status::Ok();
   }
 
-  /// The material of a cube region if it is homogeneous, otherwise -1. Voxels outside the
-  /// image count as background.
-  static int UniformMaterial(
-    const MaterialImage<Dim>& image, const LatticeIndex<Dim>& anchor, std::int64_t size)
+  /// The voxels a cell covers, clipped to the image: [first, last) per axis. Returns false when
+  /// the cell lies entirely in the padding.
+  static bool CoveredVoxels(const MaterialImage<Dim>& image, const Spacetree<Dim>& tree,
+    const LatticeIndex<Dim>& anchor, int level, LatticeIndex<Dim>& first, LatticeIndex<Dim>& last,
+    bool& clipped)
   {
-    LatticeIndex<Dim> end;
-    bool clipped = false;
+    clipped = false;
     for (int axis = 0; axis < Dim; ++axis)
     {
-      end[axis] = std::min<std::int64_t>(anchor[axis] + size, image.Dimensions[axis]);
-      clipped = clipped || end[axis] < anchor[axis] + size;
-      if (end[axis] <= anchor[axis])
+      const std::int64_t subdivision = tree.VoxelSubdivision[axis];
+      const std::int64_t end = anchor[axis] + tree.GetCellSize(level)[axis];
+      first[axis] = anchor[axis] / subdivision;
+      last[axis] = std::min<std::int64_t>((end + subdivision - 1) / subdivision, image.Dimensions[axis]);
+      clipped = clipped || last[axis] * subdivision < end;
+      if (last[axis] <= first[axis])
       {
-        return BackgroundMaterial; // entirely padding
+        return false;
       }
     }
-    const MaterialIndex first =
-      clipped ? BackgroundMaterial : image.Values[LinearIndex<Dim>(anchor, image.Dimensions)];
-    const std::int64_t rowLength = end[0] - anchor[0];
-    LatticeIndex<Dim> row = anchor;
+    return true;
+  }
+
+  /// Calls row(linearIndexOfFirstVoxel, length) for every axis-0 row of a voxel box; stops
+  /// early, returning false, when row returns false.
+  template <class RowFunction>
+  static bool ForEachVoxelRow(const LatticeIndex<Dim>& dims, const LatticeIndex<Dim>& first,
+    const LatticeIndex<Dim>& last, RowFunction&& row)
+  {
+    const std::int64_t rowLength = last[0] - first[0];
+    LatticeIndex<Dim> cursor = first;
     for (;;)
     {
-      const MaterialIndex* values = image.Values + LinearIndex<Dim>(row, image.Dimensions);
-      for (std::int64_t i = 0; i < rowLength; ++i)
+      if (!row(LinearIndex<Dim>(cursor, dims), rowLength))
       {
-        if (values[i] != first)
-        {
-          return -1;
-        }
+        return false;
       }
       int axis = 1;
       for (; axis < Dim; ++axis)
       {
-        if (++row[axis] < end[axis])
+        if (++cursor[axis] < last[axis])
         {
           break;
         }
-        row[axis] = anchor[axis];
+        cursor[axis] = first[axis];
       }
       if (axis == Dim)
       {
-        return first;
+        return true;
       }
     }
+  }
+
+  /// The material of a cell if it is homogeneous, otherwise -1. Voxels outside the image count
+  /// as background.
+  static int UniformMaterial(const MaterialImage<Dim>& image, const Spacetree<Dim>& tree,
+    const LatticeIndex<Dim>& anchor, int level)
+  {
+    LatticeIndex<Dim> first, last;
+    bool clipped;
+    if (!CoveredVoxels(image, tree, anchor, level, first, last, clipped))
+    {
+      return BackgroundMaterial; // entirely padding
+    }
+    const MaterialIndex value =
+      clipped ? BackgroundMaterial : image.Values[LinearIndex<Dim>(first, image.Dimensions)];
+    const bool uniform = ForEachVoxelRow(image.Dimensions, first, last,
+      [&](std::int64_t start, std::int64_t length)
+      {
+        const MaterialIndex* values = image.Values + start;
+        for (std::int64_t i = 0; i < length; ++i)
+        {
+          if (values[i] != value)
+          {
+            return false;
+          }
+        }
+        return true;
+      });
+    return uniform ? value : -1;
+  }
+
+  /// Whether a voxel covered by the cell asks for a level finer than the cell's.
+  static bool NeedsFinerLevel(const MaterialImage<Dim>& image, const Spacetree<Dim>& tree,
+    const std::uint8_t* minimumLevels, const LatticeIndex<Dim>& anchor, int level)
+  {
+    LatticeIndex<Dim> first, last;
+    bool clipped;
+    if (minimumLevels == nullptr || level >= tree.MaxLevel ||
+      !CoveredVoxels(image, tree, anchor, level, first, last, clipped))
+    {
+      return false;
+    }
+    return !ForEachVoxelRow(image.Dimensions, first, last,
+      [&](std::int64_t start, std::int64_t length)
+      {
+        const std::uint8_t* levels = minimumLevels + start;
+        for (std::int64_t i = 0; i < length; ++i)
+        {
+          if (levels[i] > level)
+          {
+            return false;
+          }
+        }
+        return true;
+      });
   }
 
 private:
@@ -181,6 +236,7 @@ private:
     using Scratch = NoScratch;
     const MaterialImage<Dim>* Image;
     const Spacetree<Dim>* Tree;
+    const std::uint8_t* MinimumLevels;
     std::vector<Spacetree<Dim>>* PerRoot;
     Executor* Exec;
 
@@ -197,7 +253,7 @@ private:
         for (int axis = 0; axis < Dim; ++axis)
         {
           anchor[axis] =
-            (rest % this->Tree->RootGridDimensions[axis]) * this->Tree->GetRootCellSize();
+            (rest % this->Tree->RootGridDimensions[axis]) * this->Tree->GetRootCellSize()[axis];
           rest /= this->Tree->RootGridDimensions[axis];
         }
         this->Refine(anchor, 0, (*this->PerRoot)[root]);
@@ -207,23 +263,15 @@ private:
 
     void Refine(const LatticeIndex<Dim>& anchor, int level, Spacetree<Dim>& out) const
     {
-      const std::int64_t size = this->Tree->GetCellSize(level);
-      const int material = UniformMaterial(*this->Image, anchor, size);
-      if (material >= 0)
+      const int material = UniformMaterial(*this->Image, *this->Tree, anchor, level);
+      if (material >= 0 &&
+        !NeedsFinerLevel(*this->Image, *this->Tree, this->MinimumLevels, anchor, level))
       {
         out.AddLeaf(level, anchor, static_cast<MaterialIndex>(material));
         return;
       }
-      const std::int64_t half = size / 2;
-      for (int child = 0; child < CubeInfo<Dim>::VerticesPerCell; ++child)
-      {
-        LatticeIndex<Dim> childAnchor = anchor;
-        for (int axis = 0; axis < Dim; ++axis)
-        {
-          childAnchor[axis] += ((child >> axis) & 1) * half;
-        }
-        this->Refine(childAnchor, level + 1, out);
-      }
+      this->Tree->ForEachChild(anchor, level,
+        [&](const LatticeIndex<Dim>& child) { this->Refine(child, level + 1, out); });
     }
   };
 };

@@ -20,27 +20,65 @@ namespace stm
 template <int Dim>
 Status ValidateSpacetree(const Spacetree<Dim>& tree)
 {
-  if (tree.MaxLevel < 0 || tree.MaxLevel > 20)
+  if (tree.MaxLevel < 0 || tree.MaxLevel > MaximumSupportedLevel)
   {
-    return Status::Invalid("the spacetree's MaxLevel must be between 0 and 20");
+    return Status::Invalid("the spacetree's MaxLevel must be between 0 and " +
+      std::to_string(MaximumSupportedLevel));
   }
   if (tree.LeafAnchors.size() != tree.LeafLevels.size() ||
     tree.LeafMaterials.size() != tree.LeafLevels.size())
   {
     return Status::Invalid("the spacetree's leaf arrays have different lengths");
   }
+  if (tree.CellSizes.size() != static_cast<std::size_t>(tree.MaxLevel) + 1)
   {
-    const std::int64_t limit = std::int64_t{ 1 } << 40;
+    return Status::Invalid("the spacetree's level table must have MaxLevel + 1 entries");
+  }
+  const std::int64_t limit = std::int64_t{ 1 } << 40;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    if (tree.VoxelSubdivision[axis] < 1 || tree.VoxelSubdivision[axis] > 256)
+    {
+      return Status::Invalid("the spacetree's voxel subdivision must be between 1 and 256");
+    }
+    for (int level = 0; level <= tree.MaxLevel; ++level)
+    {
+      const std::int64_t size = tree.CellSizes[level][axis];
+      if (size < 1 || size > limit)
+      {
+        return Status::Invalid("the spacetree's cell sizes must be positive");
+      }
+      if (level > 0)
+      {
+        const std::int64_t parent = tree.CellSizes[level - 1][axis];
+        if (parent % size != 0 || parent / size > MaximumSplitCount)
+        {
+          return Status::Invalid("level " + std::to_string(level) +
+            " of the spacetree's level table does not split its parent level into 1 to " +
+            std::to_string(MaximumSplitCount) + " cells per axis");
+        }
+      }
+    }
+  }
+  for (int level = 0; level < tree.MaxLevel; ++level)
+  {
+    if (tree.CellSizes[level] == tree.CellSizes[level + 1])
+    {
+      return Status::Invalid(
+        "level " + std::to_string(level + 1) + " of the spacetree's level table splits no axis");
+    }
+  }
+  {
     std::int64_t count = 1;
     for (int axis = 0; axis < Dim; ++axis)
     {
       const std::int64_t roots = tree.RootGridDimensions[axis];
-      if (roots >= 1 &&
-        (roots > (limit >> tree.MaxLevel) || count > limit / (roots << tree.MaxLevel)))
+      const std::int64_t rootSize = tree.CellSizes[0][axis];
+      if (roots >= 1 && (roots > limit / rootSize || count > limit / (roots * rootSize)))
       {
         return Status::OutOfRange("the spacetree's lattice is too large");
       }
-      count *= roots >= 1 ? roots << tree.MaxLevel : 1;
+      count *= roots >= 1 ? roots * rootSize : 1;
     }
   }
   for (int axis = 0; axis < Dim; ++axis)
@@ -49,7 +87,9 @@ Status ValidateSpacetree(const Spacetree<Dim>& tree)
     {
       return Status::Invalid("the spacetree's root grid and image dimensions must be positive");
     }
-    if (tree.ImageDimensions[axis] > tree.RootGridDimensions[axis] * tree.GetRootCellSize())
+    if (tree.ImageDimensions[axis] > limit / tree.VoxelSubdivision[axis] ||
+      tree.ImageDimensions[axis] * tree.VoxelSubdivision[axis] >
+        tree.RootGridDimensions[axis] * tree.GetRootCellSize()[axis])
     {
       return Status::Invalid("the spacetree's root grid does not cover its image");
     }
@@ -76,11 +116,12 @@ Status ValidateSpacetree(const Spacetree<Dim>& tree)
     {
       return Status::Invalid("leaf " + std::to_string(leaf) + " has an unknown material");
     }
-    const std::int64_t size = tree.GetCellSize(level);
+    const LatticeIndex<Dim>& size = tree.GetCellSize(level);
     const LatticeIndex<Dim>& anchor = tree.LeafAnchors[leaf];
     for (int axis = 0; axis < Dim; ++axis)
     {
-      if (anchor[axis] < 0 || anchor[axis] % size != 0 || anchor[axis] + size > dims[axis])
+      if (anchor[axis] < 0 || anchor[axis] % size[axis] != 0 ||
+        anchor[axis] + size[axis] > dims[axis])
       {
         return Status::Invalid("leaf " + std::to_string(leaf) +
           " lies outside the root grid or off its level's lattice");
@@ -89,7 +130,7 @@ Status ValidateSpacetree(const Spacetree<Dim>& tree)
     std::int64_t rows = 1;
     for (int axis = 1; axis < Dim; ++axis)
     {
-      rows *= size;
+      rows *= size[axis];
     }
     for (std::int64_t r = 0; r < rows; ++r)
     {
@@ -97,11 +138,11 @@ Status ValidateSpacetree(const Spacetree<Dim>& tree)
       std::int64_t rest = r;
       for (int axis = 1; axis < Dim; ++axis)
       {
-        cell[axis] += rest % size;
-        rest /= size;
+        cell[axis] += rest % size[axis];
+        rest /= size[axis];
       }
       std::uint8_t* row = coverage.data() + LinearIndex<Dim>(cell, dims);
-      for (std::int64_t i = 0; i < size; ++i)
+      for (std::int64_t i = 0; i < size[0]; ++i)
       {
         if (row[i]++ != 0)
         {

@@ -4,23 +4,31 @@
 
 // Direct conforming simplicial tessellation of the spacetree leaves (paper sections 2.3, 2.4).
 //
-// Every k-face F of the spacetree (a k-cube of some level) gets a triangulation that depends on
-// F and the vertex set V (all leaf corners) only, which makes the mesh consistent across faces
-// by construction, for any level difference:
-//  - F is split if its centre is in V (a finer leaf touches it): its triangulation is the union
-//    of those of its 2^k children;
-//  - otherwise, if V has no point on F's boundary besides its corners, F is regular and takes
-//    the template of its level;
+// Every k-face F of the spacetree (a k-box of some level) gets a triangulation that depends on
+// F and the tree only, which makes the mesh consistent across faces by construction, for any
+// level difference and any refinement pattern:
+//  - F is split if a finer leaf touches it; its triangulation is then the union of those of its
+//    children faces at the next level;
+//  - otherwise, if no leaf corner lies on F's boundary besides F's corners, F is regular and
+//    takes the template of its level;
 //  - otherwise the centre of F is inserted and joined to the triangulations of its 2k facets
 //    (the recursive midpoint rule).
-// A leaf is treated as an unsplit Dim-face. With 2^Dim refinement, F's boundary holds a point
-// of V other than its corners exactly when the midpoint of one of its edges is in V, so the
-// regularity test reads k 2^(k-1) bits.
+// A leaf is treated as an unsplit Dim-face.
+//
+// With anisotropic patterns the same geometric face can be a face of cells of several levels
+// (a pattern that does not split any of its axes); it is always handled at the finest such level,
+// its canonical level, so that it has one triangulation. At the canonical level at least one of
+// its axes is split by the next level. If all its axes are, F is split exactly when the first
+// next-level lattice point inside F is a leaf corner (the set V); otherwise the level of the
+// leaves around F decides, read from a level map. An edge is split exactly when its first
+// next-level point is in V, so regularity reads one bit per edge.
 //
 // Templates: Checkerboard (Dim <= 3, the paper's choice) cuts a square along the diagonal
 // between its corners of even level-coordinate sum and a cube into the tetrahedron of its even
-// corners plus one tetrahedron per odd corner (5 in all). Kuhn cuts a k-cube into the k!
-// simplices along monotone corner paths, in any dimension.
+// corners plus one tetrahedron per odd corner (5 in all); a cell takes it only where its square
+// faces have the cell's own level as canonical level (patterns that leave at most one axis
+// unsplit), and the midpoint rule otherwise. Kuhn cuts a k-box into the k! simplices along
+// monotone corner paths, in any dimension and for any pattern.
 //
 // Points live on the lattice of half lattice units (face centres of the finest cells); the
 // used ones are numbered in lattice order through a bitset rank, so the numbering does not
@@ -30,11 +38,13 @@
 #include "../Common/Execution.h"
 #include "../Common/LatticeBitset.h"
 #include "../Common/Status.h"
+#include "../Spacetree/LevelMap.h"
 #include "../Spacetree/Spacetree.h"
 
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <numeric>
 #include <utility>
 #include <vector>
@@ -122,12 +132,12 @@ class SpacetreeTessellator
 public:
   using Point = LatticeIndex<Dim>; // in half lattice units
 
-  /// A k-face of the spacetree: a cube of edge Size (lattice units) at Anchor, spanning the
-  /// axes set in FreeAxes.
+  /// A k-face of the spacetree: a box of the edges of Level at Anchor, spanning the axes set in
+  /// FreeAxes.
   struct Face
   {
     LatticeIndex<Dim> Anchor;
-    std::int64_t Size;
+    int Level;
     unsigned FreeAxes;
   };
 
@@ -148,7 +158,17 @@ public:
     }
     this->Tree = &tree;
     this->Options = options;
+    this->BuildLevelTables();
     this->BuildRegularCellTables();
+    if (this->NeedsLevelMap)
+    {
+      this->Map.reset(new LevelMap<Dim>());
+      const Status status = this->Map->Build(tree, executor);
+      if (!status.IsOk())
+      {
+        return status;
+      }
+    }
 
     const LatticeIndex<Dim> latticeDims = tree.GetLatticeDimensions();
     LatticeIndex<Dim> vertexDims, pointDims;
@@ -157,6 +177,7 @@ public:
       vertexDims[axis] = latticeDims[axis] + 1;
       pointDims[axis] = 2 * latticeDims[axis] + 1;
     }
+    this->LatticeDimensions = latticeDims;
     this->VertexSet = LatticeBitset<Dim>(vertexDims);
     this->PointSet = LatticeBitset<Dim>(pointDims);
 
@@ -185,6 +206,7 @@ public:
       running += here;
     }
     this->NumberOfPoints = this->PointSet.BuildRank();
+    this->Map.reset();
     executor.ReportProgress(0.5);
     return Status::Ok();
   }
@@ -195,10 +217,20 @@ public:
   /// Writes (Dim+1) point ids per simplex, positively oriented, and the material index of each
   /// simplex. IdType is the integer type of the output connectivity.
   template <class IdType, class Executor>
-  Status WriteSimplices(IdType* connectivity, MaterialIndex* materials, Executor& executor) const
+  Status WriteSimplices(IdType* connectivity, MaterialIndex* materials, Executor& executor)
   {
+    if (this->NeedsLevelMap)
+    {
+      this->Map.reset(new LevelMap<Dim>());
+      const Status status = this->Map->Build(*this->Tree, executor);
+      if (!status.IsOk())
+      {
+        return status;
+      }
+    }
     WriteKernel<IdType, Executor> write{ this, connectivity, materials, &executor };
     executor.For(0, this->Tree->GetNumberOfLeaves(), 2048, write);
+    this->Map.reset();
     return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
   }
 
@@ -220,28 +252,23 @@ public:
   /// The leaf as a Dim-face.
   Face LeafFace(std::int64_t leaf) const
   {
-    return Face{ this->Tree->LeafAnchors[leaf],
-      this->Tree->GetCellSize(this->Tree->LeafLevels[leaf]), (1u << Dim) - 1u };
+    return Face{ this->Tree->LeafAnchors[leaf], this->Tree->LeafLevels[leaf], (1u << Dim) - 1u };
   }
 
-  /// Whether a leaf has no spacetree vertex on its boundary besides its corners; its simplices
-  /// are then RegularCellSimplices(leaf) over its corners.
+  /// Whether a leaf takes its level's cell template: no leaf corner on its boundary besides its
+  /// corners, and a template that fits its faces. Its simplices are then
+  /// RegularCellSimplices(leaf) over its corners.
   bool IsRegularLeaf(std::int64_t leaf) const
   {
-    return this->IsBoundaryRegular(this->LeafFace(leaf));
+    const Face cell = this->LeafFace(leaf);
+    return this->TemplateAllowed[cell.Level] && this->IsBoundaryRegular(cell);
   }
 
   /// Corner codes (bit i: far side along axis i), Dim+1 per simplex, positively oriented, of the
   /// template of a regular leaf.
   const std::vector<std::uint8_t>& RegularCellSimplices(std::int64_t leaf) const
   {
-    const Face cell = this->LeafFace(leaf);
-    std::int64_t anchorSum = 0;
-    for (int axis = 0; axis < Dim; ++axis)
-    {
-      anchorSum += cell.Anchor[axis] / cell.Size;
-    }
-    return this->RegularCellTables[anchorSum & 1];
+    return this->RegularCellTables[this->Parity(this->LeafFace(leaf))];
   }
 
   /// Appends the Dim-simplices of a leaf (Dim+1 half-unit points each), unoriented.
@@ -263,16 +290,87 @@ public:
   }
 
 private:
+  /// The level tables: for every level and axis set, the canonical level of a face of that level
+  /// spanning those axes; whether a cell of each level may take the cell template; whether
+  /// some face needs the level map.
+  void BuildLevelTables()
+  {
+    const int levels = this->Tree->MaxLevel + 1;
+    // ShrinkMasks[m]: the axes whose edge level m makes shorter than level m - 1.
+    std::vector<unsigned> shrinkMasks(levels, 0u);
+    for (int level = 1; level < levels; ++level)
+    {
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        if (this->Tree->GetCellSize(level)[axis] < this->Tree->GetCellSize(level - 1)[axis])
+        {
+          shrinkMasks[level] |= 1u << axis;
+        }
+      }
+    }
+    constexpr unsigned allAxes = (1u << Dim) - 1u;
+    this->CanonicalLevels.assign(static_cast<std::size_t>(levels) << Dim, 0);
+    this->NeedsLevelMap = false;
+    for (int level = 0; level < levels; ++level)
+    {
+      for (unsigned axes = 0; axes <= allAxes; ++axes)
+      {
+        int canonical = level;
+        while (canonical + 1 < levels && (shrinkMasks[canonical + 1] & axes) == 0)
+        {
+          ++canonical;
+        }
+        this->CanonicalLevels[(static_cast<std::size_t>(level) << Dim) | axes] =
+          static_cast<std::int8_t>(canonical);
+        if (canonical + 1 < levels && PopCount(axes) >= 2 &&
+          (shrinkMasks[canonical + 1] & axes) != axes)
+        {
+          this->NeedsLevelMap = true;
+        }
+      }
+    }
+    this->TemplateAllowed.assign(levels, 1);
+    if (this->Options.Template == CellTemplate::Checkerboard && Dim == 3)
+    {
+      // The cube template agrees with its square faces only if they are handled at its level:
+      // the next level splits at least two of the three axes.
+      for (int level = 0; level + 1 < levels; ++level)
+      {
+        this->TemplateAllowed[level] = PopCount(shrinkMasks[level + 1]) >= 2;
+      }
+    }
+  }
+
+  int CanonicalLevel(int level, unsigned axes) const
+  {
+    return this->CanonicalLevels[(static_cast<std::size_t>(level) << Dim) | axes];
+  }
+
+  const LatticeIndex<Dim>& Size(const Face& face) const
+  {
+    return this->Tree->GetCellSize(face.Level);
+  }
+
+  /// Parity of the sum of the level coordinates of a face's anchor.
+  int Parity(const Face& face) const
+  {
+    const LatticeIndex<Dim>& size = this->Size(face);
+    std::int64_t sum = 0;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      sum += face.Anchor[axis] / size[axis];
+    }
+    return static_cast<int>(sum & 1);
+  }
+
   /// Tabulates the template of a regular cell for both anchor parities, oriented once, so
   /// that regular leaves (most of them) skip the recursion and the determinants.
   void BuildRegularCellTables()
   {
     for (int parity = 0; parity < 2; ++parity)
     {
-      Face unit{ LatticeIndex<Dim>{}, 1, (1u << Dim) - 1u };
-      unit.Anchor[0] = parity;
       std::vector<Point> simplices;
-      this->AppendTemplate(unit, simplices);
+      this->AppendTemplate(Point{}, Spacetree<Dim>::UnitSize(), parity, (1u << Dim) - 1u, simplices);
       Orient(simplices);
       auto& table = this->RegularCellTables[parity];
       table.clear();
@@ -281,7 +379,7 @@ private:
         unsigned code = 0;
         for (int axis = 0; axis < Dim; ++axis)
         {
-          code |= static_cast<unsigned>((point[axis] - 2 * unit.Anchor[axis]) / 2) << axis;
+          code |= static_cast<unsigned>(point[axis] / 2) << axis;
         }
         table.push_back(static_cast<std::uint8_t>(code));
       }
@@ -292,29 +390,16 @@ private:
   std::array<Point, CubeInfo<Dim>::VerticesPerCell> LeafCorners(std::int64_t leaf) const
   {
     const Face cell = this->LeafFace(leaf);
+    const LatticeIndex<Dim>& size = this->Size(cell);
     std::array<Point, CubeInfo<Dim>::VerticesPerCell> corners;
     for (int c = 0; c < CubeInfo<Dim>::VerticesPerCell; ++c)
     {
       for (int axis = 0; axis < Dim; ++axis)
       {
-        corners[c][axis] = 2 * (cell.Anchor[axis] + ((c >> axis) & 1) * cell.Size);
+        corners[c][axis] = 2 * (cell.Anchor[axis] + ((c >> axis) & 1) * size[axis]);
       }
     }
     return corners;
-  }
-
-  // A face centre, in lattice units; only meaningful for Size >= 2.
-  static LatticeIndex<Dim> Centre(const Face& face)
-  {
-    LatticeIndex<Dim> centre = face.Anchor;
-    for (int axis = 0; axis < Dim; ++axis)
-    {
-      if (face.FreeAxes & (1u << axis))
-      {
-        centre[axis] += face.Size / 2;
-      }
-    }
-    return centre;
   }
 
   static Point HalfUnits(const LatticeIndex<Dim>& latticePoint)
@@ -327,56 +412,101 @@ private:
     return point;
   }
 
-  /// Corner c (bit i of c selects the far side along the i-th free axis) in half units.
-  static Point Corner(const Face& face, unsigned c)
+  /// Corner c (bit i of c selects the far side along the i-th free axis) of a box in half units.
+  static Point Corner(
+    const Point& anchor, const LatticeIndex<Dim>& size, unsigned freeAxes, unsigned c)
   {
-    Point point = HalfUnits(face.Anchor);
+    Point point = anchor;
     int freeIndex = 0;
     for (int axis = 0; axis < Dim; ++axis)
     {
-      if (face.FreeAxes & (1u << axis))
+      if (freeAxes & (1u << axis))
       {
-        point[axis] += ((c >> freeIndex) & 1u) * 2 * face.Size;
+        point[axis] += ((c >> freeIndex) & 1u) * 2 * size[axis];
         ++freeIndex;
       }
     }
     return point;
   }
 
+  /// Whether a face at its canonical level is split by finer leaves.
   bool IsSplit(const Face& face) const
   {
-    return face.Size >= 2 && this->VertexSet.Test(Centre(face));
+    if (face.Level == this->Tree->MaxLevel)
+    {
+      return false;
+    }
+    const LatticeIndex<Dim>& size = this->Size(face);
+    const LatticeIndex<Dim>& childSize = this->Tree->GetCellSize(face.Level + 1);
+    LatticeIndex<Dim> inner = face.Anchor;
+    bool allSplit = true;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      if (face.FreeAxes & (1u << axis))
+      {
+        inner[axis] += childSize[axis];
+        allSplit = allSplit && childSize[axis] < size[axis];
+      }
+    }
+    if (allSplit)
+    {
+      return this->VertexSet.Test(inner);
+    }
+    // The face has no next-level point inside: ask the cells around it whether they are split.
+    const unsigned fixedAxes = ((1u << Dim) - 1u) & ~face.FreeAxes;
+    unsigned side = 0;
+    do
+    {
+      LatticeIndex<Dim> cell = face.Anchor;
+      bool inside = true;
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        if (side & (1u << axis))
+        {
+          --cell[axis];
+        }
+        inside = inside && cell[axis] >= 0 && cell[axis] < this->LatticeDimensions[axis];
+      }
+      if (inside && this->Map->LevelAt(cell) > face.Level)
+      {
+        return true;
+      }
+      side = (side - fixedAxes) & fixedAxes;
+    } while (side != 0);
+    return false;
   }
 
-  /// No point of V on the boundary besides the corners: no edge midpoint is in V.
+  /// No leaf corner on the boundary besides the face's corners: no edge of the face is split.
   bool IsBoundaryRegular(const Face& face) const
   {
-    if (face.Size < 2)
-    {
-      return true;
-    }
-    const std::int64_t half = face.Size / 2;
+    const LatticeIndex<Dim>& size = this->Size(face);
     for (int edgeAxis = 0; edgeAxis < Dim; ++edgeAxis)
     {
       if (!(face.FreeAxes & (1u << edgeAxis)))
       {
         continue;
       }
+      const int edgeLevel = this->CanonicalLevel(face.Level, 1u << edgeAxis);
+      if (edgeLevel == this->Tree->MaxLevel)
+      {
+        continue; // this axis is never split again
+      }
+      const std::int64_t step = this->Tree->GetCellSize(edgeLevel + 1)[edgeAxis];
       const unsigned others = face.FreeAxes & ~(1u << edgeAxis);
       // Enumerate the subsets of the other free axes: each is one edge parallel to edgeAxis.
       unsigned subset = 0;
       do
       {
-        LatticeIndex<Dim> midpoint = face.Anchor;
-        midpoint[edgeAxis] += half;
+        LatticeIndex<Dim> inner = face.Anchor;
+        inner[edgeAxis] += step;
         for (int axis = 0; axis < Dim; ++axis)
         {
           if (subset & (1u << axis))
           {
-            midpoint[axis] += face.Size;
+            inner[axis] += size[axis];
           }
         }
-        if (this->VertexSet.Test(midpoint))
+        if (this->VertexSet.Test(inner))
         {
           return false;
         }
@@ -387,47 +517,58 @@ private:
   }
 
   /// Appends the k-simplices (k+1 points each) of a face of the spacetree.
-  void Triangulate(const Face& face, std::vector<Point>& out, Scratch& scratch) const
+  void Triangulate(Face face, std::vector<Point>& out, Scratch& scratch) const
   {
     if (face.FreeAxes == 0)
     {
       out.push_back(HalfUnits(face.Anchor));
       return;
     }
+    face.Level = this->CanonicalLevel(face.Level, face.FreeAxes);
     if (this->IsSplit(face))
     {
-      const std::int64_t half = face.Size / 2;
-      const int k = PopCount(face.FreeAxes);
-      for (unsigned child = 0; child < (1u << k); ++child)
+      const LatticeIndex<Dim>& size = this->Size(face);
+      const LatticeIndex<Dim>& childSize = this->Tree->GetCellSize(face.Level + 1);
+      Face child{ face.Anchor, face.Level + 1, face.FreeAxes };
+      for (;;)
       {
-        Face sub{ face.Anchor, half, face.FreeAxes };
-        int freeIndex = 0;
-        for (int axis = 0; axis < Dim; ++axis)
+        this->Triangulate(child, out, scratch);
+        int axis = 0;
+        for (; axis < Dim; ++axis)
         {
-          if (face.FreeAxes & (1u << axis))
+          if (!(face.FreeAxes & (1u << axis)))
           {
-            sub.Anchor[axis] += ((child >> freeIndex) & 1u) * half;
-            ++freeIndex;
+            continue;
           }
+          child.Anchor[axis] += childSize[axis];
+          if (child.Anchor[axis] < face.Anchor[axis] + size[axis])
+          {
+            break;
+          }
+          child.Anchor[axis] = face.Anchor[axis];
         }
-        this->Triangulate(sub, out, scratch);
+        if (axis == Dim)
+        {
+          return;
+        }
       }
-      return;
     }
     this->TriangulateUnsplit(face, out, scratch);
   }
 
   void TriangulateUnsplit(const Face& face, std::vector<Point>& out, Scratch& scratch) const
   {
-    if (this->IsBoundaryRegular(face))
+    const int k = PopCount(face.FreeAxes);
+    if ((k < 3 || this->TemplateAllowed[face.Level]) && this->IsBoundaryRegular(face))
     {
-      this->AppendTemplate(face, out);
+      this->AppendTemplate(
+        HalfUnits(face.Anchor), this->Size(face), this->Parity(face), face.FreeAxes, out);
       return;
     }
     // Recursive midpoint rule: cone from the centre over the triangulated facets.
-    const int k = PopCount(face.FreeAxes);
     std::vector<Point>& facets = scratch.FacetBuffers[k - 1];
     facets.clear();
+    const LatticeIndex<Dim>& size = this->Size(face);
     for (int axis = 0; axis < Dim; ++axis)
     {
       if (!(face.FreeAxes & (1u << axis)))
@@ -436,8 +577,8 @@ private:
       }
       for (int side = 0; side < 2; ++side)
       {
-        Face facet{ face.Anchor, face.Size, face.FreeAxes & ~(1u << axis) };
-        facet.Anchor[axis] += side * face.Size;
+        Face facet{ face.Anchor, face.Level, face.FreeAxes & ~(1u << axis) };
+        facet.Anchor[axis] += side * size[axis];
         this->Triangulate(facet, facets, scratch);
       }
     }
@@ -446,7 +587,7 @@ private:
     {
       if (face.FreeAxes & (1u << axis))
       {
-        centre[axis] += face.Size;
+        centre[axis] += size[axis];
       }
     }
     for (std::size_t first = 0; first < facets.size(); first += k)
@@ -456,33 +597,42 @@ private:
     }
   }
 
-  void AppendTemplate(const Face& face, std::vector<Point>& out) const
+  /// Appends the template of a box (anchor in half units) spanning freeAxes; parity is that of
+  /// the sum of the level coordinates of its anchor.
+  void AppendTemplate(const Point& anchor, const LatticeIndex<Dim>& size, int parity,
+    unsigned freeAxes, std::vector<Point>& out) const
   {
-    const int k = PopCount(face.FreeAxes);
+    const int k = PopCount(freeAxes);
+    auto corner = [&](unsigned c) { return Corner(anchor, size, freeAxes, c); };
     if (k == 1)
     {
-      out.push_back(Corner(face, 0));
-      out.push_back(Corner(face, 1));
+      out.push_back(corner(0));
+      out.push_back(corner(1));
       return;
     }
     if (this->Options.Template == CellTemplate::Kuhn)
     {
-      this->AppendKuhn(face, k, out);
+      std::array<int, Dim> order{};
+      std::iota(order.begin(), order.begin() + k, 0);
+      do
+      {
+        unsigned c = 0;
+        out.push_back(corner(c));
+        for (int step = 0; step < k; ++step)
+        {
+          c |= 1u << order[step];
+          out.push_back(corner(c));
+        }
+      } while (std::next_permutation(order.begin(), order.begin() + k));
       return;
     }
-    // Checkerboard: parity of the corner's level coordinates (corner / Size), summed over all
-    // axes, so that the choice depends on the face alone.
-    std::int64_t anchorSum = 0;
-    for (int axis = 0; axis < Dim; ++axis)
-    {
-      anchorSum += face.Anchor[axis] / face.Size;
-    }
-    const bool anchorEven = (anchorSum & 1) == 0;
+    // Checkerboard: the parity of the level coordinates decides, so that the choice depends on
+    // the face alone.
+    const bool anchorEven = parity == 0;
     if (k == 2)
     {
       // Corners 0=(0,0) 1=(1,0) 2=(0,1) 3=(1,1).
-      const Point c0 = Corner(face, 0), c1 = Corner(face, 1), c2 = Corner(face, 2),
-                  c3 = Corner(face, 3);
+      const Point c0 = corner(0), c1 = corner(1), c2 = corner(2), c3 = corner(3);
       if (anchorEven)
       {
         out.insert(out.end(), { c0, c1, c3, c0, c3, c2 });
@@ -509,30 +659,11 @@ private:
         odd[oddCount++] = c;
       }
     }
-    out.insert(out.end(),
-      { Corner(face, even[0]), Corner(face, even[1]), Corner(face, even[2]),
-        Corner(face, even[3]) });
+    out.insert(out.end(), { corner(even[0]), corner(even[1]), corner(even[2]), corner(even[3]) });
     for (unsigned o : odd)
     {
-      out.insert(out.end(),
-        { Corner(face, o), Corner(face, o ^ 1u), Corner(face, o ^ 2u), Corner(face, o ^ 4u) });
+      out.insert(out.end(), { corner(o), corner(o ^ 1u), corner(o ^ 2u), corner(o ^ 4u) });
     }
-  }
-
-  void AppendKuhn(const Face& face, int k, std::vector<Point>& out) const
-  {
-    std::array<int, Dim> order{};
-    std::iota(order.begin(), order.begin() + k, 0);
-    do
-    {
-      unsigned corner = 0;
-      out.push_back(Corner(face, corner));
-      for (int step = 0; step < k; ++step)
-      {
-        corner |= 1u << order[step];
-        out.push_back(Corner(face, corner));
-      }
-    } while (std::next_permutation(order.begin(), order.begin() + k));
   }
 
   struct MarkVerticesKernel
@@ -544,13 +675,13 @@ private:
       const Spacetree<Dim>& tree = *this->Self->Tree;
       for (std::int64_t leaf = begin; leaf < end; ++leaf)
       {
-        const std::int64_t size = tree.GetCellSize(tree.LeafLevels[leaf]);
+        const LatticeIndex<Dim>& size = tree.GetCellSize(tree.LeafLevels[leaf]);
         for (int c = 0; c < CubeInfo<Dim>::VerticesPerCell; ++c)
         {
           LatticeIndex<Dim> corner = tree.LeafAnchors[leaf];
           for (int axis = 0; axis < Dim; ++axis)
           {
-            corner[axis] += ((c >> axis) & 1) * size;
+            corner[axis] += ((c >> axis) & 1) * size[axis];
           }
           this->Self->VertexSet.Set(corner);
         }
@@ -668,6 +799,13 @@ private:
 
   const Spacetree<Dim>* Tree = nullptr;
   SpacetreeTessellationOptions Options;
+  LatticeIndex<Dim> LatticeDimensions{};
+  std::vector<std::int8_t> CanonicalLevels;
+  std::vector<std::uint8_t> TemplateAllowed;
+  bool NeedsLevelMap = false;
+  /// Levels of the leaves per lattice cell, while Prepare and WriteSimplices run, for patterns
+  /// that leave axes unsplit.
+  std::unique_ptr<LevelMap<Dim>> Map;
   LatticeBitset<Dim> VertexSet;
   LatticeBitset<Dim> PointSet;
   std::vector<std::int64_t> SimplexOffsets;

@@ -222,15 +222,43 @@ inline std::vector<std::int64_t> MaterialLabels(int count)
   return labels;
 }
 
-/// Builds the spacetree of an image and, when balanceLevel > 0, balances it.
+/// The pattern that splits every axis into `count` in every level.
+template <int D>
+std::vector<stm::SplitCounts<D>> UniformPattern(int count)
+{
+  stm::SplitCounts<D> counts;
+  counts.fill(count);
+  return { counts };
+}
+
+/// Builds the spacetree of an image on a planned level table and, when balanceLevel > 0,
+/// balances it.
+template <int D, class Executor>
+stm::Status BuildTreeWithPlan(const LabelImage<D>& image, const stm::RefinementPlanOptions<D>& plan,
+  int balanceLevel, bool faceBalanceOnly, Executor& executor, stm::Spacetree<D>& tree)
+{
+  stm::Status status = stm::SpacetreeBuilder<D>().Build(
+    image.View(), MaterialLabels(image.LargestMaterial() + 1), plan, tree, executor);
+  if (!status.IsOk() || balanceLevel <= 0)
+  {
+    return status;
+  }
+  stm::SpacetreeBalanceOptions balanceOptions;
+  balanceOptions.BalanceLevel = balanceLevel;
+  balanceOptions.FaceBalanceOnly = faceBalanceOnly;
+  return stm::SpacetreeBalancer<D>().Balance(tree, balanceOptions, executor);
+}
+
+/// Builds the 2^D spacetree of an image and, when balanceLevel > 0, balances it.
 template <int D, class Executor>
 stm::Status BuildTree(const LabelImage<D>& image, std::int64_t maxCellSize, int balanceLevel,
   bool faceBalanceOnly, Executor& executor, stm::Spacetree<D>& tree)
 {
-  stm::SpacetreeBuildOptions buildOptions;
-  buildOptions.MaxCellSize = maxCellSize;
+  stm::RefinementPlanOptions<D> plan;
+  plan.MaxCellSize = maxCellSize;
+  plan.Pattern = UniformPattern<D>(2);
   stm::Status status = stm::SpacetreeBuilder<D>().Build(
-    image.View(), MaterialLabels(image.LargestMaterial() + 1), buildOptions, tree, executor);
+    image.View(), MaterialLabels(image.LargestMaterial() + 1), plan, tree, executor);
   if (!status.IsOk() || balanceLevel <= 0)
   {
     return status;
@@ -493,9 +521,10 @@ ExactMeasures ComputeExactMeasures(const SimplicialMesh<D>& mesh)
 }
 
 /// Faces between a body voxel (any non-background material) and a non-body voxel, counting the
-/// faces on the image border: the boundary measure of the voxel model, in voxel faces.
+/// faces on the image border: the boundary measure of the voxel model, in voxel faces. With an
+/// axis, only the faces orthogonal to it.
 template <int D>
-std::int64_t CountVoxelBoundaryFaces(const LabelImage<D>& image)
+std::int64_t CountVoxelBoundaryFaces(const LabelImage<D>& image, int onlyAxis = -1)
 {
   std::int64_t faces = 0;
   ForEachIndex<D>(image.GetDimensions(),
@@ -507,6 +536,10 @@ std::int64_t CountVoxelBoundaryFaces(const LabelImage<D>& image)
       }
       for (int axis = 0; axis < D; ++axis)
       {
+        if (onlyAxis >= 0 && axis != onlyAxis)
+        {
+          continue;
+        }
         for (int step : { -1, 1 })
         {
           stm::LatticeIndex<D> neighbor = voxel;
@@ -518,11 +551,11 @@ std::int64_t CountVoxelBoundaryFaces(const LabelImage<D>& image)
   return faces;
 }
 
-/// Number of lattice cells (voxels) covered by a leaf.
+/// Number of lattice cells covered by a leaf.
 template <int D>
 std::int64_t LeafVolume(const stm::Spacetree<D>& tree, std::int64_t leaf)
 {
-  return stm::IntPow(2, D * (tree.MaxLevel - tree.LeafLevels[leaf]));
+  return tree.GetCellVolume(tree.LeafLevels[leaf]);
 }
 
 template <int D>
@@ -541,11 +574,11 @@ std::int64_t MapCellsToLeaves(const stm::Spacetree<D>& tree, std::vector<std::in
   std::int64_t conflicts = 0;
   for (std::int64_t leaf = 0; leaf < tree.GetNumberOfLeaves(); ++leaf)
   {
-    const std::int64_t size = tree.GetCellSize(tree.LeafLevels[leaf]);
+    const stm::LatticeIndex<D>& size = tree.GetCellSize(tree.LeafLevels[leaf]);
     stm::LatticeIndex<D> upper;
     for (int axis = 0; axis < D; ++axis)
     {
-      upper[axis] = tree.LeafAnchors[leaf][axis] + size;
+      upper[axis] = tree.LeafAnchors[leaf][axis] + size[axis];
       if (tree.LeafAnchors[leaf][axis] < 0 || upper[axis] > dims[axis])
       {
         ++conflicts;
@@ -576,9 +609,130 @@ std::int64_t CountMaterialMismatches(const stm::Spacetree<D>& tree, const LabelI
     [&](const stm::LatticeIndex<D>& cell)
     {
       const std::int64_t leaf = cellToLeaf[stm::LinearIndex<D>(cell, dims)];
-      mismatches += leaf < 0 || tree.LeafMaterials[leaf] != image.At(cell);
+      stm::LatticeIndex<D> voxel;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        voxel[axis] = cell[axis] / tree.VoxelSubdivision[axis];
+      }
+      mismatches += leaf < 0 || tree.LeafMaterials[leaf] != image.At(voxel);
     });
   return mismatches;
+}
+
+template <int D>
+std::vector<stm::CellTemplate> TemplatesOf()
+{
+  if (D <= 3)
+  {
+    return { stm::CellTemplate::Kuhn, stm::CellTemplate::Checkerboard };
+  }
+  return { stm::CellTemplate::Kuhn };
+}
+
+inline std::string TemplateName(stm::CellTemplate cellTemplate)
+{
+  return cellTemplate == stm::CellTemplate::Kuhn ? "Kuhn" : "Checkerboard";
+}
+
+inline stm::SpacetreeTessellationOptions TessellationOptions(
+  stm::CellTemplate cellTemplate, bool includeBackground = false)
+{
+  stm::SpacetreeTessellationOptions options;
+  options.Template = cellTemplate;
+  options.IncludeBackground = includeBackground;
+  return options;
+}
+
+/// One voxel in the units of the exact volumes: D! times its volume in half lattice units, 2^D.
+template <int D>
+std::int64_t ScaledVoxelVolume()
+{
+  return stm::IntPow(2, D) * stm::Factorial(D);
+}
+
+/// One voxel face in the units of the exact boundary measure: (D-1)! 2^(D-1).
+template <int D>
+std::int64_t ScaledVoxelFace()
+{
+  return stm::IntPow(2, D - 1) * stm::Factorial(D - 1);
+}
+
+/// Point ids must follow the lattice order of the half-unit points, each visited exactly once.
+template <int D>
+void ExpectPointsInLatticeOrder(const SimplicialMesh<D>& mesh, const stm::Spacetree<D>& tree)
+{
+  stm::LatticeIndex<D> pointDims;
+  for (int axis = 0; axis < D; ++axis)
+  {
+    pointDims[axis] = 2 * tree.GetLatticeDimensions()[axis] + 1;
+  }
+  std::int64_t outside = 0, outOfOrder = 0;
+  for (std::int64_t id = 0; id < mesh.GetNumberOfPoints(); ++id)
+  {
+    const auto& point = mesh.HalfUnitPoints[id];
+    for (int axis = 0; axis < D; ++axis)
+    {
+      outside += point[axis] < 0 || point[axis] >= pointDims[axis];
+    }
+    if (id > 0 &&
+      stm::LinearIndex<D>(mesh.HalfUnitPoints[id - 1], pointDims) >=
+        stm::LinearIndex<D>(point, pointDims))
+    {
+      ++outOfOrder;
+    }
+  }
+  EXPECT_EQ(outside, 0);
+  EXPECT_EQ(outOfOrder, 0) << "point ids do not follow the lattice order";
+  EXPECT_EQ(std::count(mesh.VisitCounts.begin(), mesh.VisitCounts.end(), 1),
+    static_cast<std::ptrdiff_t>(mesh.VisitCounts.size()))
+    << "VisitPoints must report every point exactly once";
+}
+
+/// Everything the mesh of a body must satisfy, against the voxel image it came from.
+template <int D>
+void ExpectMeshMatchesVoxelModel(
+  const SimplicialMesh<D>& mesh, const stm::Spacetree<D>& tree, const LabelImage<D>& image)
+{
+  const stm::MeshInvariantReport report = CheckMesh<D>(mesh);
+  EXPECT_TRUE(report.IsValid()) << report.Summary();
+  EXPECT_EQ(report.NumberOfCells, mesh.GetNumberOfSimplices());
+  EXPECT_EQ(report.NumberOfPoints, mesh.GetNumberOfPoints());
+  EXPECT_EQ(std::count(mesh.Connectivity.begin(), mesh.Connectivity.end(), -1), 0)
+    << "connectivity entries were not written";
+  ExpectPointsInLatticeOrder<D>(mesh, tree);
+
+  const ExactMeasures exact = ComputeExactMeasures<D>(mesh);
+  EXPECT_EQ(exact.NonPositiveSimplices, 0) << "WriteSimplices must orient every simplex";
+  const std::int64_t latticeCellsPerVoxel = stm::NumberOfLatticeCells<D>(tree.VoxelSubdivision);
+  std::map<std::int64_t, std::int64_t> expectedVolumes;
+  for (stm::MaterialIndex material = 1; material <= image.LargestMaterial(); ++material)
+  {
+    if (image.CountVoxels(material) > 0)
+    {
+      expectedVolumes[material] =
+        image.CountVoxels(material) * ScaledVoxelVolume<D>() * latticeCellsPerVoxel;
+    }
+  }
+  EXPECT_EQ(exact.ScaledVolumePerMaterial, expectedVolumes) << "exact volume per material";
+  for (const auto& [material, volume] : expectedVolumes)
+  {
+    ASSERT_EQ(report.VolumePerMaterial.count(material), 1u) << "material " << material;
+    EXPECT_TRUE(CheckerMeasureMatches(
+      report.VolumePerMaterial.at(material), static_cast<double>(volume / ScaledVoxelVolume<D>())))
+      << "checker volume of material " << material;
+  }
+
+  // A voxel face orthogonal to an axis holds the product of the other axes' subdivisions.
+  std::int64_t faces = 0;
+  for (int axis = 0; axis < D; ++axis)
+  {
+    faces += CountVoxelBoundaryFaces<D>(image, axis) * latticeCellsPerVoxel /
+      tree.VoxelSubdivision[axis];
+  }
+  EXPECT_EQ(exact.SkewBoundaryFacets, 0) << "the boundary of a voxel body is axis-aligned";
+  EXPECT_EQ(exact.ScaledBoundaryMeasure, faces * ScaledVoxelFace<D>()) << "exact boundary";
+  EXPECT_TRUE(CheckerMeasureMatches(report.BoundaryMeasure, static_cast<double>(faces)))
+    << "checker boundary";
 }
 
 } // namespace stmtest

@@ -122,7 +122,7 @@ TYPED_TEST(LevelMapTest, SplitReplacesOneLeafByItsChildrenInPlace)
       stm::LatticeIndex<D> anchor = tree.LeafAnchors[leaf];
       for (int axis = 0; axis < D; ++axis)
       {
-        anchor[axis] += ((child >> axis) & 1) * tree.GetCellSize(level + 1);
+        anchor[axis] += ((child >> axis) & 1) * tree.GetCellSize(level + 1)[axis];
       }
       expected.AddLeaf(level + 1, anchor, tree.LeafMaterials[leaf]);
     }

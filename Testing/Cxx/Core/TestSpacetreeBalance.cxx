@@ -106,7 +106,7 @@ void ExpectCanonicalOrder(const stm::Spacetree<D>& tree)
       expectedLevels.push_back(static_cast<std::uint8_t>(level));
       return;
     }
-    const std::int64_t half = tree.GetCellSize(level + 1);
+    const std::int64_t half = tree.GetCellSize(level + 1)[0];
     for (int child = 0; child < (1 << D); ++child)
     {
       stm::LatticeIndex<D> childAnchor = anchor;
@@ -123,7 +123,7 @@ void ExpectCanonicalOrder(const stm::Spacetree<D>& tree)
       stm::LatticeIndex<D> anchor;
       for (int axis = 0; axis < D; ++axis)
       {
-        anchor[axis] = root[axis] * tree.GetRootCellSize();
+        anchor[axis] = root[axis] * tree.GetRootCellSize()[axis];
       }
       visit(anchor, 0);
     });
@@ -155,7 +155,7 @@ void ExpectRefinementOf(const stm::Spacetree<D>& original, const stm::Spacetree<
     const auto& anchor = refined.LeafAnchors[leaf];
     for (int axis = 0; axis < D; ++axis)
     {
-      misaligned += anchor[axis] % refined.GetCellSize(refined.LeafLevels[leaf]) != 0;
+      misaligned += anchor[axis] % refined.GetCellSize(refined.LeafLevels[leaf])[axis] != 0;
     }
     const std::int64_t owner = originalCells[stm::LinearIndex<D>(anchor, dims)];
     // An aligned cube no coarser than the original leaf holding its anchor lies inside it.
@@ -198,7 +198,7 @@ std::int64_t CountUnforcedSplits(
       continue;
     }
     const int parentLevel = level - 1;
-    const std::int64_t parentSize = balanced.GetCellSize(parentLevel);
+    const std::int64_t parentSize = balanced.GetCellSize(parentLevel)[0];
     stm::LatticeIndex<D> parent, shellLower, shellUpper;
     for (int axis = 0; axis < D; ++axis)
     {

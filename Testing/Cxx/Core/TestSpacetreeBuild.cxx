@@ -73,7 +73,7 @@ stm::Spacetree<D> ReferenceTree(const LabelImage<D>& image, const stm::Spacetree
       stm::LatticeIndex<D> anchor;
       for (int axis = 0; axis < D; ++axis)
       {
-        anchor[axis] = root[axis] * built.GetRootCellSize();
+        anchor[axis] = root[axis] * built.GetRootCellSize()[axis];
       }
       ReferenceRefine<D>(image, anchor, 0, built.MaxLevel, reference);
     });
@@ -109,14 +109,14 @@ TYPED_TEST(SpacetreeBuildTest, RootGridIsTheCoarsestPowerOfTwoGridCoveringTheIma
     SCOPED_TRACE("MaxCellSize " + std::to_string(maxCellSize));
     stm::SequentialExecutor executor;
     stm::Spacetree<D> tree;
-    stm::SpacetreeBuildOptions options;
+    stm::RefinementPlanOptions<D> options;
     options.MaxCellSize = maxCellSize;
     const stm::Status status =
       stm::SpacetreeBuilder<D>().Build(image.View(), labels, options, tree, executor);
     ASSERT_TRUE(status.IsOk()) << status.GetMessage();
 
     const std::int64_t rootSize = ExpectedRootSize(maxCellSize, 13);
-    EXPECT_EQ(tree.GetRootCellSize(), rootSize);
+    EXPECT_EQ(tree.GetRootCellSize(), UniformExtents<D>(rootSize));
     EXPECT_EQ(std::int64_t{ 1 } << tree.MaxLevel, rootSize);
     for (int axis = 0; axis < D; ++axis)
     {
@@ -172,7 +172,7 @@ TYPED_TEST(SpacetreeBuildTest, LeavesPartitionTheRootGridAndMatchTheImageVoxelBy
         volume += LeafVolume<D>(tree, leaf);
         for (int axis = 0; axis < D; ++axis)
         {
-          misaligned += tree.LeafAnchors[leaf][axis] % tree.GetCellSize(tree.LeafLevels[leaf]) != 0;
+          misaligned += tree.LeafAnchors[leaf][axis] % tree.GetCellSize(tree.LeafLevels[leaf])[axis] != 0;
         }
       }
       EXPECT_EQ(badLevels, 0);
@@ -233,7 +233,7 @@ TYPED_TEST(SpacetreeBuildTest, InterfaceAtAnOddVoxelPlaneIsResolvedByUnitLeaves)
   {
     const std::int64_t x = tree.LeafAnchors[leaf][0];
     const bool touchesInterface = x == 4 || x == 5;
-    const bool unit = tree.GetCellSize(tree.LeafLevels[leaf]) == 1;
+    const bool unit = tree.GetCellSize(tree.LeafLevels[leaf])[0] == 1;
     coarseNextToInterface += touchesInterface && !unit;
     unitLeavesAwayFromIt += !touchesInterface && unit;
   }
@@ -296,9 +296,9 @@ TYPED_TEST(SpacetreeBuildTest, InvalidInputsAreReportedAsInvalidArgument)
   stm::SequentialExecutor executor;
   stm::Spacetree<D> tree;
   const std::vector<std::int64_t> labels = MaterialLabels(2);
-  stm::SpacetreeBuildOptions options;
+  stm::RefinementPlanOptions<D> options;
   auto expectInvalid = [&](const stm::MaterialImage<D>& view, const std::vector<std::int64_t>& l,
-                         const stm::SpacetreeBuildOptions& o, const char* what)
+                         const stm::RefinementPlanOptions<D>& o, const char* what)
   {
     SCOPED_TRACE(what);
     const stm::Status status = stm::SpacetreeBuilder<D>().Build(view, l, o, tree, executor);
@@ -313,10 +313,10 @@ TYPED_TEST(SpacetreeBuildTest, InvalidInputsAreReportedAsInvalidArgument)
 
   LabelImage<D> image(AwkwardExtents<D>());
   image.GetValues()[3] = 1;
-  stm::SpacetreeBuildOptions zero;
+  stm::RefinementPlanOptions<D> zero;
   zero.MaxCellSize = 0;
   expectInvalid(image.View(), labels, zero, "MaxCellSize 0");
-  stm::SpacetreeBuildOptions negative;
+  stm::RefinementPlanOptions<D> negative;
   negative.MaxCellSize = -4;
   expectInvalid(image.View(), labels, negative, "negative MaxCellSize");
 

@@ -72,7 +72,7 @@ TYPED_TEST(SpacetreeValidateTest, SplittingALeafIntoItsChildrenKeepsTheTreeValid
     stm::LatticeIndex<D> childAnchor = anchor;
     for (int axis = 0; axis < D; ++axis)
     {
-      childAnchor[axis] += ((child >> axis) & 1) * tree.GetCellSize(level + 1);
+      childAnchor[axis] += ((child >> axis) & 1) * tree.GetCellSize(level + 1)[axis];
     }
     tree.AddLeaf(level + 1, childAnchor, material);
   }
@@ -146,7 +146,7 @@ TYPED_TEST(SpacetreeValidateTest, BrokenLeavesAreRejected)
   }
   {
     stm::Spacetree<D> tree = valid;
-    tree.LeafAnchors.back()[D - 1] = -tree.GetCellSize(tree.LeafLevels.back());
+    tree.LeafAnchors.back()[D - 1] = -tree.GetCellSize(tree.LeafLevels.back())[D - 1];
     ExpectInvalid<D>(tree, invalid, "leaf below the root grid");
   }
   {
@@ -228,7 +228,7 @@ TYPED_TEST(SpacetreeValidateTest, HugeLatticeIsOutOfRange)
   {
     SCOPED_TRACE("root grid " + ToString<D>(rootGrid));
     stm::Spacetree<D> tree;
-    tree.MaxLevel = 20;
+    tree.SetUniformRefinement(20);
     tree.RootGridDimensions = rootGrid;
     tree.ImageDimensions = UniformExtents<D>(1);
     tree.MaterialLabels.assign(1, 0); // "= { 0 }" draws a false GCC 12 -Wnonnull warning at -O3
