@@ -19,8 +19,13 @@ import subprocess
 import sys
 
 ERROR_PREFIX = "stmesh: error:"
-TETRA, HEXAHEDRON = 10, 12
+TRIANGLE, QUAD, TETRA, HEXAHEDRON = 5, 9, 10, 12
 STAGES_TESSELLATE = ["read", "spacetree", "balance", "tessellate", "write"]
+# The spacetree parameters of the summary when none of their options is given.
+DEFAULT_SPACETREE_PARAMETERS = {
+    "pattern": "auto", "root_cell_size": None, "max_cell_size_labels": {},
+    "refine_region": None, "grading": None, "sizing_array": None, "balance_labels": {},
+    "balance_region": None}
 
 
 class CaseFailed(Exception):
@@ -83,19 +88,22 @@ class Context:
         check(not leftovers, "temporary files left behind: %s" % leftovers)
         return err
 
-    def read_back(self, mesh):
-        completed = subprocess.run([self.helper, "readback", mesh], capture_output=True,
+    def read_back(self, mesh, geometry=False):
+        """The helper's read-back; with geometry also the measures and edges per material."""
+        completed = subprocess.run([self.helper, "readback", mesh] +
+                                   (["geometry"] if geometry else []), capture_output=True,
                                    text=True, timeout=100)
         check(completed.returncode == 0,
               "cannot read back %s: %s" % (mesh, completed.stderr.strip()))
         return json.loads(completed.stdout)
 
-    def make_image(self, name, scalar_type="uint8"):
+    def make_image(self, name, scalar_type="uint8", variant=None):
         # VTK's writers choose the layout by lower-case extension (vtkMetaImageWriter turns
         # "x.MHA" into "x.mhd" + "x.raw"), so write "x.mha" and rename it for upper-case tests.
         path = self.path(name)
         written = self.path(name.lower())
-        completed = subprocess.run([self.helper, "make-image", written, scalar_type],
+        completed = subprocess.run([self.helper, "make-image", written, scalar_type] +
+                                   ([variant] if variant else []),
                                    capture_output=True, text=True, timeout=100)
         check(completed.returncode == 0,
               "cannot write test image %s: %s" % (name, completed.stderr.strip()))
@@ -162,7 +170,11 @@ def case_help_and_version(c):
     out, _ = c.run_ok(["--help"])
     check(out.startswith("Usage: stmesh [INPUT]"), "help does not start with the usage")
     for option in ["-o OUTPUT", "--labels", "--max-cell-size", "--balance", "--stop-after",
-                   "--threads", "--summary", "--version"]:
+                   "--threads", "--summary", "--version", "--pattern P",
+                   "--root-cell-size X,Y,Z", "--max-cell-size-label L:S", "--refine-region",
+                   "box:X0,Y0,Z0,X1,Y1,Z1", "sphere:CX,CY,CZ,R", "cylinder:CX,CY,CZ,AX,AY,AZ,R",
+                   "slab:PX,PY,PZ,NX,NY,NZ,W", "--grading G", "--sizing-array NAME",
+                   "--balance-label L:LEVEL", "--balance-region REGION:LEVEL"]:
         check(option in out, "help does not mention %s" % option)
     out, _ = c.run_ok(["-h"])
     check(out.startswith("Usage: stmesh"), "-h does not print the usage")
@@ -179,9 +191,15 @@ def case_default_input_vtu(c):
     summary = load_summary(summary_path)
     check(summary["default_input"] is True and summary["input"] == c.aal, "bad input in summary")
     check(summary["output"] == output, "bad output in summary")
-    check(summary["parameters"] == {"labels": [], "all_labels": True, "max_cell_size": 16,
-                                    "balance": 1, "stop_after": "tessellate", "compressor": "lz4"},
-          "bad parameters %s" % summary["parameters"])
+    check(summary["parameters"] == dict(
+        {"labels": [], "all_labels": True, "max_cell_size": 16, "balance": 1,
+         "stop_after": "tessellate", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS),
+        "bad parameters %s" % summary["parameters"])
+    # 1 mm voxels, MaxCellSize 16: cubes of 16 down to 1 voxel.
+    check(summary["voxel_subdivision"] == [1, 1, 1], "bad voxel subdivision")
+    check(summary["cell_sizes_voxels"] == [[16, 16, 16], [8, 8, 8], [4, 4, 4], [2, 2, 2],
+                                           [1, 1, 1]],
+          "bad cell sizes %s" % summary["cell_sizes_voxels"])
     check([entry["name"] for entry in summary["stages"]] == STAGES_TESSELLATE, "bad stages")
     check(summary["image"]["dimensions"] == [181, 217, 181], "bad image dimensions")
     check(stage(summary, "write")["file_bytes"] == os.path.getsize(output), "bad file size")
@@ -339,9 +357,14 @@ def case_summary_json(c):
     for key in ["input", "output", "parameters", "threads", "stages", "total_seconds",
                 "tetrahedra_per_material"]:
         check(key in summary, "summary lacks %s" % key)
-    check(summary["parameters"] == {"labels": [2, 7], "all_labels": False, "max_cell_size": 4,
-                                    "balance": 2, "stop_after": "tessellate", "compressor": "lz4"},
-          "bad parameters %s" % summary["parameters"])
+    check(summary["parameters"] == dict(
+        {"labels": [2, 7], "all_labels": False, "max_cell_size": 4, "balance": 2,
+         "stop_after": "tessellate", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS),
+        "bad parameters %s" % summary["parameters"])
+    check(summary["spacetree_axes"] == [0, 1, 2], "bad spacetree axes")
+    check(summary["voxel_subdivision"] == [1, 1, 1], "bad voxel subdivision")
+    check(summary["cell_sizes_voxels"] == [[4, 4, 4], [2, 2, 2], [1, 1, 1]],
+          "bad cell sizes %s" % summary["cell_sizes_voxels"])
     for entry in summary["stages"]:
         for key in ["name", "seconds", "cells", "points", "leaves", "peak_rss_mib"]:
             check(key in entry, "stage %s lacks %s" % (entry.get("name"), key))
@@ -502,6 +525,393 @@ def case_error_output_directory(c):
         os.mkdir(locked, 0o555)
         c.run_failing([image, "-o", os.path.join(locked, "out.vtu")], 1, "not writable",
                       output=os.path.join(locked, "out.vtu"))
+
+
+# ------------------------------------------------------------------------------------------------
+# The spacetree options (refinement pattern, root cell size, size criteria, balance levels).
+
+def test_label(i, j, k):
+    """The label of voxel (i, j, k) of the helper's 20 x 18 x 16 test image (TestLabel)."""
+    if (i - 9) ** 2 + (j - 9) ** 2 + (k - 8) ** 2 <= 25:
+        return 1
+    if 13 <= i <= 18 and 2 <= j <= 8 and 4 <= k <= 11:
+        return 2
+    if 2 <= i <= 3 and 13 <= j <= 15 and 2 <= k <= 4:
+        return 7
+    return 0
+
+
+def voxel_volumes(flat=False):
+    """Voxels (1 mm^3 or 1 mm^2 each) per body label of the test image, or of its 2D slice."""
+    counts = {}
+    for k in ([8] if flat else range(16)):
+        for j in range(18):
+            for i in range(20):
+                label = test_label(i, j, k)
+                if label:
+                    counts[str(label)] = counts.get(str(label), 0) + 1
+    return counts
+
+
+def check_volumes(mesh, flat=False):
+    """The mesh invariants the read-back shows: positive simplices, and every material's volume
+    (area in 2D) equal to its voxels' (the spacing is 1 mm)."""
+    check(mesh["smallest_measure"] is not None and mesh["smallest_measure"] > 0,
+          "a simplex has a non-positive measure: %s" % mesh["smallest_measure"])
+    expected = voxel_volumes(flat)
+    check(sorted(mesh["material_measures"]) == sorted(expected),
+          "materials %s, expected %s" % (sorted(mesh["material_measures"]), sorted(expected)))
+    for material, volume in expected.items():
+        check(abs(mesh["material_measures"][material] - volume) <= 1e-6 * volume,
+              "material %s measures %r, its voxels %d" %
+              (material, mesh["material_measures"][material], volume))
+
+
+def mesh_run(c, image, name, arguments, stop_after=None):
+    """stmesh IMAGE -o NAME.vtu --summary NAME.json ARGUMENTS: the summary and the read-back,
+    after checking that they agree."""
+    output, summary_path = c.path(name + ".vtu"), c.path(name + ".json")
+    extra = ["--stop-after", stop_after] if stop_after else []
+    out, err = c.run_ok([image, "-o", output, "--summary", summary_path] + extra + arguments)
+    summary, mesh = load_summary(summary_path), c.read_back(output, geometry=True)
+    if stop_after in (None, "tessellate"):
+        cell_type = TRIANGLE if summary["spacetree_axes"] == [0, 1] else TETRA
+        key = "triangles_per_material" if cell_type == TRIANGLE else "tetrahedra_per_material"
+    else:
+        cell_type, key = (QUAD if summary["spacetree_axes"] == [0, 1] else HEXAHEDRON,
+                          "leaves_per_material")
+    check_mesh_against_summary(mesh, summary, cell_type, key)
+    summary["stderr"] = err
+    return summary, mesh
+
+
+def leaves(summary, stage_name):
+    return stage(summary, stage_name)["leaves"]
+
+
+def case_option_pattern(c):
+    image = c.make_image("labels.vti")
+    summary, mesh = mesh_run(c, image, "auto", [])
+    check(summary["cell_sizes_voxels"] == [[16, 16, 16], [8, 8, 8], [4, 4, 4], [2, 2, 2],
+                                           [1, 1, 1]],
+          "auto: cell sizes %s" % summary["cell_sizes_voxels"])
+    summary, mesh = mesh_run(c, image, "three", ["--pattern", "3x3x3"])
+    check(summary["parameters"]["pattern"] == "3x3x3", "bad pattern in the parameters")
+    # Powers of 3 up to --max-cell-size 16.
+    check(summary["cell_sizes_voxels"] == [[9, 9, 9], [3, 3, 3], [1, 1, 1]],
+          "3x3x3: cell sizes %s" % summary["cell_sizes_voxels"])
+    check(summary["voxel_subdivision"] == [1, 1, 1], "3x3x3: bad voxel subdivision")
+    check(max(mesh["longest_edges"].values()) <= 9, "3x3x3: a tetrahedron longer than 9 voxels")
+    check_volumes(mesh)
+    # Finest level first, the last entry repeating; blanks and upper case are accepted.
+    summary, mesh = mesh_run(c, image, "mixed", ["--pattern", "2X2X1, 2x2x2"])
+    check(summary["parameters"]["pattern"] == "2x2x1,2x2x2", "pattern not normalised")
+    check(summary["cell_sizes_voxels"] == [[16, 16, 8], [8, 8, 4], [4, 4, 2], [2, 2, 1],
+                                           [1, 1, 1]],
+          "2x2x1,2x2x2: cell sizes %s" % summary["cell_sizes_voxels"])
+    check_volumes(mesh)
+    # A 2D image takes two counts per entry, or three with the flat axis ignored.
+    flat = c.make_image("slice.vti", variant="2d")
+    summary, mesh = mesh_run(c, flat, "flat", ["--pattern", "3x3"])
+    check(summary["spacetree_axes"] == [0, 1], "the slice is not meshed in 2D")
+    check(summary["cell_sizes_voxels"] == [[9, 9], [3, 3], [1, 1]],
+          "2D 3x3: cell sizes %s" % summary["cell_sizes_voxels"])
+    check_volumes(mesh, flat=True)
+    _, same = mesh_run(c, flat, "flat3", ["--pattern", "3x3x1"])
+    check(same == mesh, "--pattern 3x3x1 and 3x3 differ on a 2D image")
+    # Two counts on a 3D image are a usage error.
+    c.run_failing([image, "-o", c.path("out.vtu"), "--pattern", "2x2"], 2,
+                  "give three split counts", output=c.path("out.vtu"))
+
+
+def case_option_root_cell_size(c):
+    image = c.make_image("labels.vti")
+    summary, mesh = mesh_run(c, image, "root", ["--root-cell-size", "8,8,4"])
+    check(summary["parameters"]["root_cell_size"] == [8, 8, 4], "bad root_cell_size parameter")
+    check(summary["cell_sizes_voxels"][0] == [8, 8, 4],
+          "root cells %s, expected [8, 8, 4]" % summary["cell_sizes_voxels"][0])
+    check(summary["cell_sizes_voxels"][-1] == [1, 1, 1], "finest cells are not voxels")
+    check(mesh["longest_edges"] and max(mesh["longest_edges"].values()) <= 8,
+          "a tetrahedron longer than the root cell")
+    check_volumes(mesh)
+    # A root size the pattern reaches: 9 = 3 x 3.
+    summary, _ = mesh_run(c, image, "root9", ["--root-cell-size", "9,9,9", "--pattern", "3x3x3"],
+                          stop_after="spacetree")
+    check(summary["cell_sizes_voxels"] == [[9, 9, 9], [3, 3, 3], [1, 1, 1]],
+          "root 9 with 3x3x3: cell sizes %s" % summary["cell_sizes_voxels"])
+    # Two sizes for a 2D image, along the two axes it spans; a third is ignored.
+    flat = c.make_image("slice.vti", variant="2d")
+    summary, mesh = mesh_run(c, flat, "flat", ["--root-cell-size", "6,4"])
+    check(summary["cell_sizes_voxels"][0] == [6, 4] and
+          summary["cell_sizes_voxels"][-1] == [1, 1],
+          "2D root 6,4: cell sizes %s" % summary["cell_sizes_voxels"])
+    check_volumes(mesh, flat=True)
+    _, same = mesh_run(c, flat, "flat3", ["--root-cell-size", "6,4,1"])
+    check(same == mesh, "--root-cell-size 6,4,1 and 6,4 differ on a 2D image")
+    c.run_failing([image, "-o", c.path("out.vtu"), "--root-cell-size", "8,8"], 2,
+                  "give three sizes", output=c.path("out.vtu"))
+
+
+def case_option_max_cell_size_label(c):
+    image = c.make_image("labels.vti")
+    base, base_tree = mesh_run(c, image, "base_tree", [], stop_after="spacetree")
+    sized, sized_tree = mesh_run(c, image, "sized_tree", ["--max-cell-size-label", "1:2"],
+                                 stop_after="spacetree")
+    check(sized["parameters"]["max_cell_size_labels"] == {"1": 2}, "bad parameter")
+    # The ball of label 1 holds leaves of 4 voxels; the box of label 2 none above 2.
+    check(base_tree["longest_edges"]["1"] == 4,
+          "label 1's largest leaf is %s voxels without the option, expected 4" %
+          base_tree["longest_edges"]["1"])
+    check(sized_tree["longest_edges"]["1"] == 2,
+          "label 1's largest leaf is %s voxels, expected 2" % sized_tree["longest_edges"]["1"])
+    # Only label 1's leaves change.
+    for material in ["0", "2", "7"]:
+        check(sized["leaves_per_material"][material] == base["leaves_per_material"][material],
+              "--max-cell-size-label 1:2 changed the leaves of label %s" % material)
+    check(sized["leaves_per_material"]["1"] > base["leaves_per_material"]["1"],
+          "label 1 has no more leaves")
+    _, base_mesh = mesh_run(c, image, "base", [])
+    summary, mesh = mesh_run(c, image, "sized", ["--max-cell-size-label", "2:1,1:1.5"])
+    check(summary["parameters"]["max_cell_size_labels"] == {"2": 1, "1": 1.5}, "bad parameter")
+    check(mesh["cells"] > base_mesh["cells"], "no more tetrahedra than without the option")
+    for material in ["1", "2"]:
+        check(mesh["material_counts"][material] > base_mesh["material_counts"][material],
+              "label %s has no more tetrahedra" % material)
+        check(mesh["longest_edges"][material] == 1,
+              "a tetrahedron of label %s is longer than 1 voxel" % material)
+    check_volumes(mesh)
+
+
+def case_option_refine_region(c):
+    image = c.make_image("labels.vti")
+    base, base_mesh = mesh_run(c, image, "base", [])
+    # A box inside the ball of label 1, refined to 0.5 mm on 1 mm voxels.
+    box = "box:6.5,6.5,5.5,11.5,11.5,10.5:0.5"
+    summary, mesh = mesh_run(c, image, "box", ["--refine-region", box])
+    check(summary["parameters"]["refine_region"] ==
+          {"type": "box", "values": [6.5, 6.5, 5.5, 11.5, 11.5, 10.5], "size": 0.5},
+          "bad refine_region parameter %s" % summary["parameters"]["refine_region"])
+    check(summary["voxel_subdivision"] == [2, 2, 2],
+          "voxel subdivision %s, expected [2, 2, 2]" % summary["voxel_subdivision"])
+    check(summary["cell_sizes_voxels"] == [[16, 16, 16], [8, 8, 8], [4, 4, 4], [2, 2, 2],
+                                           [1, 1, 1], [0.5, 0.5, 0.5]],
+          "cell sizes %s" % summary["cell_sizes_voxels"])
+    check(mesh["cells"] > base_mesh["cells"], "the region adds no tetrahedra")
+    check(mesh["material_counts"]["2"] == base_mesh["material_counts"]["2"] and
+          mesh["material_counts"]["7"] == base_mesh["material_counts"]["7"],
+          "the region changed the tetrahedra of labels far from it")
+    check_volumes(mesh)
+    _, tree = mesh_run(c, image, "box_tree", ["--refine-region", box], stop_after="spacetree")
+    check(tree["shortest_edges"]["1"] == 0.5, "no 0.5 mm leaf in the box")
+    check(tree["shortest_edges"]["2"] == 1, "leaves below the voxel outside the box")
+
+    for name, region, subdivision in [("sphere", "sphere:9,9,8,3:0.5", 2),
+                                      ("cylinder", "cylinder:9,9,8,0,0,1,2:1", 1),
+                                      ("slab", "slab:9,9,8,0,0,1,2:0.5", 2)]:
+        summary, mesh = mesh_run(c, image, name, ["--refine-region", region])
+        check(summary["voxel_subdivision"] == [subdivision] * 3,
+              "%s: voxel subdivision %s" % (name, summary["voxel_subdivision"]))
+        check(mesh["cells"] > base_mesh["cells"], "%s: no more tetrahedra" % name)
+        check_volumes(mesh)
+        if name == "slab":
+            # The normal's length does not matter: the width is in physical units.
+            _, same = mesh_run(c, image, "slab_long_normal",
+                               ["--refine-region", "slab:9,9,8,0,0,5,2:0.5"])
+            check(same == mesh, "the slab depends on the length of its normal")
+            # The band is |z - 8| <= 1: three voxel layers; a thinner one holds one layer.
+            _, thin = mesh_run(c, image, "slab_thin", ["--refine-region", "slab:9,9,8,0,0,1,0.5:0.5"])
+            check(base_mesh["cells"] < thin["cells"] < mesh["cells"],
+                  "a thinner slab does not refine less")
+
+
+def case_option_grading(c):
+    image = c.make_image("labels.vti")
+    base, _ = mesh_run(c, image, "base", [], stop_after="spacetree")
+    graded, tree = mesh_run(c, image, "graded", ["--grading", "1.5"], stop_after="spacetree")
+    loose, _ = mesh_run(c, image, "loose", ["--grading", "4"], stop_after="spacetree")
+    check(graded["parameters"]["grading"] == 1.5, "bad grading parameter")
+    check(leaves(base, "spacetree") < leaves(loose, "spacetree") < leaves(graded, "spacetree"),
+          "leaves without grading %d, grading 4 %d, grading 1.5 %d: not increasing" %
+          (leaves(base, "spacetree"), leaves(loose, "spacetree"), leaves(graded, "spacetree")))
+    _, base_mesh = mesh_run(c, image, "base_mesh", [])
+    _, mesh = mesh_run(c, image, "graded_mesh", ["--grading", "1.5"])
+    check(mesh["cells"] > base_mesh["cells"], "grading adds no tetrahedra")
+    check_volumes(mesh)
+
+
+def case_option_sizing_array(c):
+    image = c.make_image("sized.vti", variant="sizing")
+    base, base_tree = mesh_run(c, image, "base", [], stop_after="spacetree")
+    sized, tree = mesh_run(c, image, "sized", ["--sizing-array", "sizing"],
+                           stop_after="spacetree")
+    check(sized["parameters"]["sizing_array"] == "sizing", "bad sizing_array parameter")
+    # The array asks for 2 mm in every voxel (the padding of the root grid beyond the image has
+    # no size, so background leaves there stay larger).
+    check(base_tree["longest_edges"]["1"] == 4, "label 1 has no leaf of 4 mm without the array")
+    for material in ["1", "2", "7"]:
+        check(tree["longest_edges"][material] <= 2,
+              "a leaf of label %s is %s mm, the sizing array asks for 2" %
+              (material, tree["longest_edges"][material]))
+    check(tree["longest_edges"]["1"] == 2, "label 1 has no leaf of 2 mm")
+    check(leaves(sized, "spacetree") > leaves(base, "spacetree"), "no more leaves")
+    _, mesh = mesh_run(c, image, "sized_mesh", ["--sizing-array", "sizing"])
+    check_volumes(mesh)
+    # A missing array, one of the wrong association, one with a zero size.
+    c.run_failing([image, "-o", c.path("out.vtu"), "--sizing-array", "missing"], 1,
+                  "no point array named 'missing'", output=c.path("out.vtu"))
+    c.run_failing([image, "-o", c.path("out.vtu"), "--sizing-array", "cell_sizing"], 1,
+                  "needs the labels' association", output=c.path("out.vtu"))
+    c.run_failing([image, "-o", c.path("out.vtu"), "--sizing-array", "bad_sizing"], 1,
+                  "holds sizes that are not positive", output=c.path("out.vtu"))
+
+
+def case_option_balance_label(c):
+    image = c.make_image("labels.vti")
+    three, _ = mesh_run(c, image, "three", ["--balance", "3"], stop_after="balance")
+    one, _ = mesh_run(c, image, "one", ["--balance", "1"], stop_after="balance")
+    labelled, _ = mesh_run(c, image, "labelled", ["--balance", "3", "--balance-label", "1:1"],
+                           stop_after="balance")
+    check(labelled["parameters"]["balance_labels"] == {"1": 1}, "bad balance_labels parameter")
+    check(leaves(three, "balance") < leaves(labelled, "balance") < leaves(one, "balance"),
+          "balance leaves: level 3 %d, label 1 at level 1 %d, level 1 %d: not increasing" %
+          (leaves(three, "balance"), leaves(labelled, "balance"), leaves(one, "balance")))
+    _, mesh = mesh_run(c, image, "mesh", ["--balance", "3", "--balance-label", "1:1,2:2"])
+    check_volumes(mesh)
+    c.run_failing([image, "-o", c.path("out.vtu"), "--balance-label", "9:1"], 1,
+                  "LabelBalanceLevels names label 9", output=c.path("out.vtu"))
+
+
+def case_option_balance_region(c):
+    image = c.make_image("labels.vti")
+    three, _ = mesh_run(c, image, "three", ["--balance", "3"], stop_after="balance")
+    one, _ = mesh_run(c, image, "one", ["--balance", "1"], stop_after="balance")
+    region, _ = mesh_run(c, image, "sphere", ["--balance", "3", "--balance-region",
+                                              "sphere:9,9,8,6:1"], stop_after="balance")
+    check(region["parameters"]["balance_region"] ==
+          {"type": "sphere", "values": [9, 9, 8, 6], "level": 1},
+          "bad balance_region parameter %s" % region["parameters"]["balance_region"])
+    check(leaves(three, "balance") < leaves(region, "balance") < leaves(one, "balance"),
+          "balance leaves: level 3 %d, sphere at level 1 %d, level 1 %d: not increasing" %
+          (leaves(three, "balance"), leaves(region, "balance"), leaves(one, "balance")))
+    # A region covering the whole image gives --balance 1.
+    whole, _ = mesh_run(c, image, "whole", ["--balance", "3", "--balance-region",
+                                            "box:-10,-10,-10,30,30,30:1"], stop_after="balance")
+    check(whole["leaves_per_material"] == one["leaves_per_material"],
+          "a region over the whole image differs from --balance 1")
+    slab, _ = mesh_run(c, image, "slab", ["--balance", "3", "--balance-region",
+                                          "slab:9,9,8,0,0,1,4:1"], stop_after="balance")
+    check(leaves(three, "balance") < leaves(slab, "balance"), "the slab adds no leaves")
+    _, mesh = mesh_run(c, image, "mesh", ["--balance", "3", "--balance-region",
+                                          "cylinder:9,9,8,1,0,0,4:1"])
+    check_volumes(mesh)
+    # A region outside the image changes nothing, and says so.
+    outside, _ = mesh_run(c, image, "outside", ["--balance", "3", "--balance-region",
+                                                "sphere:100,100,100,5:1"], stop_after="balance")
+    check("stmesh: warning: --balance-region contains no leaf centre" in outside["stderr"],
+          "no warning about a balance region outside the image")
+    check(outside["leaves_per_material"] == three["leaves_per_material"],
+          "a balance region outside the image changed the tree")
+
+
+def case_error_spacetree_option_values(c):
+    image = c.make_image("labels.vti")
+    output = c.path("out.vtu")
+    for arguments, text in [
+            (["--pattern", ""], "needs a value"),
+            (["--pattern", "cubes"], "is not auto or split counts"),
+            (["--pattern", "3x3x"], "empty entry"),
+            (["--pattern", "3x9x3"], "out of range (1 to 8)"),
+            (["--pattern", "3x0x3"], "out of range (1 to 8)"),
+            (["--pattern", "1x1x1"], "splits no axis"),
+            (["--pattern", "2x2x2x2"], "4 split counts"),
+            (["--pattern", "2x2,2x2x2"], "different numbers of split counts"),
+            (["--root-cell-size", "8,8,8,8"], "4 sizes"),
+            (["--root-cell-size", "8"], "1 sizes"),
+            (["--root-cell-size", "8,0,8"], "out of range"),
+            (["--root-cell-size", "8,-8,8"], "out of range"),
+            (["--root-cell-size", "8,x,8"], "not an integer"),
+            (["--root-cell-size", "8,8,4", "--max-cell-size", "8"], "exclude each other"),
+            (["--max-cell-size-label", "3"], "is not LABEL:VALUE"),
+            (["--max-cell-size-label", "3:2:1"], "is not LABEL:VALUE"),
+            (["--max-cell-size-label", "3:0"], "must be positive"),
+            (["--max-cell-size-label", "3:-2"], "must be positive"),
+            (["--max-cell-size-label", "3:0.5"], "below one voxel"),
+            (["--max-cell-size-label", "3:two"], "not a number"),
+            (["--max-cell-size-label", "3:2,3:4"], "listed twice"),
+            (["--max-cell-size-label", "0:2"], "background"),
+            (["--max-cell-size-label", "x:2"], "not an integer"),
+            (["--max-cell-size-label", "3:2,"], "empty entry"),
+            (["--refine-region", "cone:0,0,0,1:1"], "unknown region type 'cone'"),
+            (["--refine-region", "sphere:0,0,0,5"], "is not REGION:SIZE"),
+            (["--refine-region", "sphere:0,0,5:1"], "needs 4 numbers, got 3"),
+            (["--refine-region", "box:0,0,0,1,1,1,1:1"], "needs 6 numbers, got 7"),
+            (["--refine-region", "sphere:0,0,0,5:0"], "SIZE must be positive"),
+            (["--refine-region", "sphere:0,0,0,5:-1"], "SIZE must be positive"),
+            (["--refine-region", "sphere:0,0,0,5:inf"], "not a number"),
+            (["--refine-region", "sphere:0,0,a,5:1"], "not a number"),
+            (["--refine-region", "sphere:0,0,0,0:1"], "radius must be positive"),
+            (["--refine-region", "box:0,0,0,10,0,10:1"], "degenerate box"),
+            (["--refine-region", "box:5,0,0,1,10,10:1"], "degenerate box"),
+            (["--refine-region", "cylinder:0,0,0,0,0,0,3:1"], "axis AX,AY,AZ is zero"),
+            (["--refine-region", "cylinder:0,0,0,0,0,1,-3:1"], "radius must be positive"),
+            (["--refine-region", "slab:0,0,0,0,0,1,0:1"], "width must be positive"),
+            (["--refine-region", "slab:0,0,0,0,0,0,2:1"], "normal NX,NY,NZ is zero"),
+            (["--refine-region", "sphere:0,0,0,5:1", "--refine-region", "sphere:1,1,1,5:1"],
+             "more than once"),
+            (["--grading", "1.2"], "at least 1.5"),
+            (["--grading", "0"], "at least 1.5"),
+            (["--grading", "-2"], "at least 1.5"),
+            (["--grading", "1.5x"], "not a number"),
+            (["--sizing-array", ""], "needs an array name"),
+            (["--balance-label", "1:0"], "out of range (1 to 20)"),
+            (["--balance-label", "1:21"], "out of range (1 to 20)"),
+            (["--balance-label", "1:1.5"], "not an integer"),
+            (["--balance-label", "1"], "is not LABEL:VALUE"),
+            (["--balance-label", "1:1,1:2"], "listed twice"),
+            (["--balance-region", "sphere:0,0,0,5:0"], "out of range (1 to 20)"),
+            (["--balance-region", "sphere:0,0,0,5:21"], "out of range (1 to 20)"),
+            (["--balance-region", "sphere:0,0,0,5:0.5"], "not an integer"),
+            (["--balance-region", "sphere:0,0,0,5"], "is not REGION:LEVEL"),
+            (["--balance-region", "ring:0,0,0,5:1"], "unknown region type"),
+            (["--balance-region", "box:0,0,0,0,1,1:1"], "degenerate box"),
+            (["--balance-region", "slab:0,0,0,1,0,0,-1:1"], "width must be positive"),
+            (["--balance", "0", "--balance-label", "1:1"], "cannot be combined with --balance 0"),
+            (["--balance", "0", "--balance-region", "sphere:0,0,0,5:1"],
+             "cannot be combined with --balance 0"),
+            # Checked against the image: a 3D image needs three numbers.
+            (["--root-cell-size", "8,8"], "give three sizes"),
+            (["--pattern", "2x2,2x2"], "give three split counts")]:
+        err = c.run_failing([image, "-o", output] + arguments, 2, text, output=output)
+        error_lines = [line for line in err.splitlines() if line.startswith(ERROR_PREFIX)]
+        check(len(error_lines) == 1, "expected one error line, got %s" % error_lines)
+        check("--help" in err, "usage errors should point to --help")
+    # The --name=value form parses the same way.
+    c.run_failing([image, "-o", output, "--grading=1"], 2, "at least 1.5", output=output)
+
+
+def case_error_spacetree_filter_errors(c):
+    image = c.make_image("labels.vti")
+    output = c.path("out.vtu")
+    for arguments, text in [
+            # The voxel centres are at integer coordinates 0..19, 0..17, 0..15.
+            (["--refine-region", "box:100,100,100,110,110,110:0.5"],
+             "The refinement region contains no voxel centre of the image"),
+            (["--refine-region", "slab:0,0,8.5,0,0,1,0.5:0.5"],
+             "The refinement region contains no voxel centre of the image"),
+            (["--pattern", "3x3x3", "--root-cell-size", "8,8,8"],
+             "is not reachable with the refinement pattern"),
+            (["--root-cell-size", "32,16,16"], "is larger than the image (20 voxels)"),
+            (["--max-cell-size-label", "9:2"],
+             "LabelMaxCellSizes names label 9, which is not in the body of interest"),
+            (["--labels", "1", "--max-cell-size-label", "2:2"],
+             "LabelMaxCellSizes names label 2, which is not in the body of interest"),
+            (["--balance-label", "9:1"], "LabelBalanceLevels names label 9")]:
+        err = c.run_failing([image, "-o", output] + arguments, 1, text, output=output)
+        check("--help" not in err, "a filter error should not point to --help")
+        check(any(line.startswith(ERROR_PREFIX + " building the spacetree:") or
+                  line.startswith(ERROR_PREFIX + " balancing the spacetree:")
+                  for line in err.splitlines()),
+              "the message does not name the stage")
 
 
 def main():

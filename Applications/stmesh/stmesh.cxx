@@ -20,12 +20,18 @@
 #include "stmSpacetreeTessellate.h"
 
 #include "vtkAlgorithm.h"
+#include "vtkBox.h"
 #include "vtkCallbackCommand.h"
 #include "vtkCellData.h"
 #include "vtkCommand.h"
+#include "vtkCylinder.h"
 #include "vtkDataArray.h"
 #include "vtkExecutive.h"
+#include "vtkFieldData.h"
+#include "vtkIdList.h"
 #include "vtkImageData.h"
+#include "vtkImplicitBoolean.h"
+#include "vtkImplicitFunction.h"
 #include "vtkLogger.h"
 #include "vtkMetaImageReader.h"
 #include "vtkNIFTIImageReader.h"
@@ -33,12 +39,16 @@
 #include "vtkNrrdReader.h"
 #include "vtkObjectFactory.h"
 #include "vtkOutputWindow.h"
+#include "vtkPlane.h"
 #include "vtkPointData.h"
+#include "vtkPoints.h"
 #include "vtkSMPTools.h"
 #include "vtkSmartPointer.h"
+#include "vtkSphere.h"
 #include "vtkType.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkUnstructuredGridWriter.h"
+#include "vtkVariant.h"
 #include "vtkVersion.h"
 #include "vtkXMLImageDataReader.h"
 #include "vtkXMLUnstructuredGridWriter.h"
@@ -51,6 +61,7 @@
 #include <cctype>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -66,6 +77,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #ifndef STMESH_VERSION
@@ -82,9 +94,14 @@ const int MaxMaxCellSize = 1 << 20; // stmImageToSpacetree clamps to this
 const int DefaultBalanceLevel = 1;
 const int MaxBalanceLevel = 20; // stmSpacetreeBalance clamps to this
 const int MaxThreads = 4096;
+const int MaxSplitCount = 8;       // stmImageToSpacetree's largest split count per axis
+const double MinimumGrading = 1.5; // stmImageToSpacetree's smallest grading
 
 const char* const UsageText =
   R"(Usage: stmesh [INPUT] [-o OUTPUT] [--labels 1,2,5] [--max-cell-size N] [--balance L]
+              [--pattern P] [--root-cell-size X,Y,Z] [--max-cell-size-label L:S,...]
+              [--refine-region REGION:SIZE] [--grading G] [--sizing-array NAME]
+              [--balance-label L:LEVEL,...] [--balance-region REGION:LEVEL]
               [--stop-after spacetree|balance|tessellate] [--threads N] [--summary FILE.json]
               [--compressor lz4|zlib|none]
        stmesh -h|--help
@@ -103,10 +120,44 @@ Arguments:
   --max-cell-size N     largest leaf edge in voxels, 1 to 1048576. Default 16.
   --balance L           largest level difference between adjacent leaves, 1 to 20; 0 skips
                         balancing. Default 1 (best-shaped tetrahedra).
+  --pattern P           refinement pattern: auto (the default: cells as cubic as possible in
+                        physical units), split counts per image axis joined by x, 1 to 8 each
+                        (3x3x3), or a comma-separated list of them, finest level first, the
+                        last repeating for coarser levels (2x2x1,2x2x2). A 2D image takes two
+                        counts per entry (or three, the flat axis ignored).
+  --root-cell-size X,Y,Z
+                        root cell edges in voxels (X,Y for a 2D image), at most the image size
+                        and reached exactly by the pattern; not with --max-cell-size. Default:
+                        the largest cells the pattern reaches within --max-cell-size.
+  --max-cell-size-label L:S[,L:S...]
+                        largest leaf edge S, in voxels (at least 1), for the leaves of label L.
+  --refine-region REGION:SIZE
+                        largest leaf edge SIZE (> 0, physical units, e.g. mm; may be below the
+                        voxel size) for the voxels whose centre is in REGION, one of (in
+                        physical coordinates):
+                          box:X0,Y0,Z0,X1,Y1,Z1         X0 < X1, Y0 < Y1, Z0 < Z1
+                          sphere:CX,CY,CZ,R             centre and radius R > 0
+                          cylinder:CX,CY,CZ,AX,AY,AZ,R  infinite; a point on the axis, the
+                                                        axis direction and radius R > 0
+                          slab:PX,PY,PZ,NX,NY,NZ,W      the band of width W > 0 around the
+                                                        plane through P with normal N
+  --grading G           grade the leaf sizes: no leaf more than G times larger than the finest
+                        leaf within its own size; G >= 1.5. Default: no grading.
+  --sizing-array NAME   an array of the image (with the association of the labels: point or
+                        cell data) that gives the largest leaf edge at each voxel, in physical
+                        units, positive.
+  --balance-label L:LEVEL[,L:LEVEL...]
+                        balance level, 1 to 20, of the leaves of label L instead of --balance;
+                        two adjacent leaves satisfy the smaller of their levels.
+  --balance-region REGION:LEVEL
+                        balance level, 1 to 20, of the leaves whose centre is in REGION (the
+                        same REGION syntax as --refine-region; a slab of width W is the band
+                        around its plane), overriding --balance and --balance-label.
   --stop-after STAGE    write the output of spacetree, balance or tessellate (the default).
   --threads N           number of threads, 1 to 4096. Default: all cores, or VTK_SMP_MAX_THREADS.
                         The STDThread backend is used unless VTK_SMP_BACKEND_IN_USE is set.
-  --summary FILE.json   also write the per-stage figures and per-material counts as JSON.
+  --summary FILE.json   also write the per-stage figures, the spacetree's cell size per level
+                        (in voxels) and the per-material counts as JSON.
   --compressor C        compression of .vtu files: lz4 (the default, fastest), zlib (files
                         about 2.3 times smaller, written about 1 s slower per 5 million
                         tetrahedra) or none.
@@ -291,6 +342,16 @@ const char* StopStageName(StopStage stage)
   return "?";
 }
 
+/// A region of --refine-region or --balance-region: an implicit function in physical coordinates
+/// and the size (or balance level) that applies inside it.
+struct RegionOption
+{
+  std::string Type;           // empty: no region; box, sphere, cylinder or slab
+  std::vector<double> Values; // the numbers after the type, as given
+  double Size = 0.0;          // --refine-region: the largest leaf edge in physical units
+  int Level = 0;              // --balance-region: the balance level
+};
+
 struct Options
 {
   bool ShowHelp = false;
@@ -304,6 +365,15 @@ struct Options
   int Threads = 0; // 0: not given on the command line
   std::string SummaryPath;
   std::string Compressor = "lz4"; // of .vtu files: lz4, zlib or none
+  std::string Pattern = "auto";   // normalised: lower case, no blanks
+  int PatternCounts = 0;          // split counts per entry (2 or 3); 0 for auto
+  std::vector<int> RootCellSize;  // empty: automatic; else 2 or 3 sizes in voxels
+  std::vector<std::pair<int, double>> LabelMaxCellSizes;
+  RegionOption RefineRegion;
+  double Grading = 0.0; // 0: off
+  std::string SizingArray;
+  std::vector<std::pair<int, int>> LabelBalanceLevels;
+  RegionOption BalanceRegion;
 };
 
 // strtoll skips leading blanks and stops at the first non-digit, so "3x", " 3" or "" would slip
@@ -368,6 +438,296 @@ std::vector<int> ParseLabels(const std::string& text)
   return labels;
 }
 
+/// The items of a separated list, trimmed; an empty item is an error that shows the example.
+std::vector<std::string> SplitList(
+  const std::string& text, char separator, const std::string& what, const std::string& example)
+{
+  std::vector<std::string> items;
+  std::size_t begin = 0;
+  while (true)
+  {
+    const std::size_t end = text.find(separator, begin);
+    const std::string item =
+      Trim(text.substr(begin, end == std::string::npos ? std::string::npos : end - begin));
+    if (item.empty())
+    {
+      throw UsageError(what + ": empty entry in '" + text + "'; give " + example);
+    }
+    items.push_back(item);
+    if (end == std::string::npos)
+    {
+      break;
+    }
+    begin = end + 1;
+  }
+  return items;
+}
+
+/// A finite decimal number ("2", "-0.5", "1e-3"); like ParseInteger, the whole text must be the
+/// number (no blanks, no "inf", "nan" or hexadecimal).
+double ParseReal(const std::string& text, const std::string& what)
+{
+  if (text.empty())
+  {
+    throw UsageError(what + " needs a number, got an empty string");
+  }
+  if (text.find_first_not_of("0123456789+-.eE") != std::string::npos)
+  {
+    throw UsageError(what + ": '" + text + "' is not a number");
+  }
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || *end != '\0')
+  {
+    throw UsageError(what + ": '" + text + "' is not a number");
+  }
+  if (!std::isfinite(value))
+  {
+    throw UsageError(what + ": " + text + " is out of range");
+  }
+  return value;
+}
+
+/// --pattern: "auto", or entries of 2 or 3 split counts (1 to 8) joined by 'x', separated by
+/// commas. Returns the text normalised as stmImageToSpacetree reads it (lower case, no blanks)
+/// and the number of counts per entry (0 for auto).
+std::string ParsePattern(const std::string& text, int& countsPerEntry)
+{
+  std::string pattern;
+  for (const char c : text)
+  {
+    if (!std::isspace(static_cast<unsigned char>(c)))
+    {
+      pattern += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    }
+  }
+  countsPerEntry = 0;
+  if (pattern == "auto")
+  {
+    return pattern;
+  }
+  if (pattern.empty())
+  {
+    throw UsageError("--pattern needs a value such as auto, 3x3x3 or 2x2x1,2x2x2");
+  }
+  if (pattern.find_first_not_of("0123456789x,") != std::string::npos)
+  {
+    throw UsageError(
+      "--pattern: '" + text + "' is not auto or split counts such as 3x3x3 or 2x2x1,2x2x2");
+  }
+  for (const std::string& entry :
+    SplitList(pattern, ',', "--pattern", "split counts such as 3x3x3 or 2x2x1,2x2x2"))
+  {
+    const std::vector<std::string> counts =
+      SplitList(entry, 'x', "--pattern", "split counts such as 3x3x3 or 2x2x1,2x2x2");
+    if (counts.size() != 2 && counts.size() != 3)
+    {
+      throw UsageError("--pattern: entry '" + entry + "' has " + std::to_string(counts.size()) +
+        " split counts; give 3 per entry (2 for a 2D image)");
+    }
+    if (countsPerEntry != 0 && static_cast<int>(counts.size()) != countsPerEntry)
+    {
+      throw UsageError("--pattern: the entries of '" + text +
+        "' have different numbers of split counts; give 3 per entry (2 for a 2D image)");
+    }
+    countsPerEntry = static_cast<int>(counts.size());
+    bool splits = false;
+    for (const std::string& count : counts)
+    {
+      splits = ParseInteger(count, "--pattern split count", 1, MaxSplitCount) > 1 || splits;
+    }
+    if (!splits)
+    {
+      throw UsageError("--pattern: entry '" + entry + "' splits no axis (all counts are 1)");
+    }
+  }
+  return pattern;
+}
+
+/// --root-cell-size: 2 or 3 positive sizes in voxels.
+std::vector<int> ParseRootCellSize(const std::string& text)
+{
+  const std::vector<std::string> items =
+    SplitList(text, ',', "--root-cell-size", "sizes in voxels such as 8,8,4");
+  if (items.size() != 2 && items.size() != 3)
+  {
+    throw UsageError("--root-cell-size: '" + text + "' has " + std::to_string(items.size()) +
+      " sizes; give X,Y,Z in voxels (X,Y for a 2D image)");
+  }
+  std::vector<int> sizes;
+  for (const std::string& item : items)
+  {
+    sizes.push_back(static_cast<int>(ParseInteger(item, "--root-cell-size", 1, MaxMaxCellSize)));
+  }
+  return sizes;
+}
+
+/// "L:V[,L:V...]": non-zero labels, each listed once, each with a value text.
+std::vector<std::pair<int, std::string>> ParseLabelPairs(
+  const std::string& text, const std::string& what, const std::string& example)
+{
+  std::vector<std::pair<int, std::string>> pairs;
+  std::set<int> seen;
+  for (const std::string& item : SplitList(text, ',', what, example))
+  {
+    const std::size_t colon = item.find(':');
+    if (colon == std::string::npos || item.find(':', colon + 1) != std::string::npos)
+    {
+      throw UsageError(what + ": '" + item + "' is not LABEL:VALUE; give " + example);
+    }
+    const std::string labelText = Trim(item.substr(0, colon));
+    const int label =
+      static_cast<int>(ParseInteger(labelText, what + " label", VTK_INT_MIN, VTK_INT_MAX));
+    if (label == 0)
+    {
+      throw UsageError(what + ": 0 is the background label and cannot be part of the body");
+    }
+    if (!seen.insert(label).second)
+    {
+      throw UsageError(what + ": label " + labelText + " is listed twice");
+    }
+    pairs.emplace_back(label, Trim(item.substr(colon + 1)));
+  }
+  return pairs;
+}
+
+std::vector<std::pair<int, double>> ParseLabelMaxCellSizes(const std::string& text)
+{
+  const std::string what = "--max-cell-size-label";
+  std::vector<std::pair<int, double>> sizes;
+  for (const auto& pair : ParseLabelPairs(text, what, "LABEL:SIZE pairs such as 3:2,7:8"))
+  {
+    const double size = ParseReal(pair.second, what + " size");
+    if (!(size > 0))
+    {
+      throw UsageError(what + ": the size of label " + std::to_string(pair.first) +
+        " must be positive, got " + pair.second);
+    }
+    if (size < 1)
+    {
+      throw UsageError(what + ": the size of label " + std::to_string(pair.first) + " is " +
+        pair.second + " voxels, below one voxel; use --refine-region or --sizing-array for " +
+        "cells smaller than a voxel");
+    }
+    if (size > MaxMaxCellSize)
+    {
+      throw UsageError(what + ": the size of label " + std::to_string(pair.first) + " (" +
+        pair.second + ") is out of range (1 to " + std::to_string(MaxMaxCellSize) + ")");
+    }
+    sizes.emplace_back(pair.first, size);
+  }
+  return sizes;
+}
+
+std::vector<std::pair<int, int>> ParseLabelBalanceLevels(const std::string& text)
+{
+  const std::string what = "--balance-label";
+  std::vector<std::pair<int, int>> levels;
+  for (const auto& pair : ParseLabelPairs(text, what, "LABEL:LEVEL pairs such as 3:2,7:1"))
+  {
+    levels.emplace_back(
+      pair.first, static_cast<int>(ParseInteger(pair.second, what + " level", 1, MaxBalanceLevel)));
+  }
+  return levels;
+}
+
+struct RegionType
+{
+  const char* Name;
+  std::size_t Count;
+  const char* Form;
+};
+
+const RegionType RegionTypes[] = { { "box", 6, "box:X0,Y0,Z0,X1,Y1,Z1" },
+  { "sphere", 4, "sphere:CX,CY,CZ,R" }, { "cylinder", 7, "cylinder:CX,CY,CZ,AX,AY,AZ,R" },
+  { "slab", 7, "slab:PX,PY,PZ,NX,NY,NZ,W" } };
+
+/// --refine-region TYPE:NUMBERS:SIZE and --balance-region TYPE:NUMBERS:LEVEL.
+RegionOption ParseRegion(const std::string& text, const std::string& what, bool balanceLevel)
+{
+  const std::string valueName = balanceLevel ? "LEVEL" : "SIZE";
+  const std::string example = balanceLevel ? "sphere:0,-20,10,15:2" : "sphere:0,-20,10,15:0.5";
+  const std::size_t first = text.find(':');
+  const std::size_t second = first == std::string::npos ? first : text.find(':', first + 1);
+  if (second == std::string::npos || text.find(':', second + 1) != std::string::npos)
+  {
+    throw UsageError(what + ": '" + text + "' is not REGION:" + valueName +
+      " (TYPE:NUMBERS:" + valueName + ", for example " + example + ")");
+  }
+  RegionOption region;
+  const std::string type = Trim(text.substr(0, first));
+  const RegionType* found = nullptr;
+  for (const RegionType& candidate : RegionTypes)
+  {
+    if (type == candidate.Name)
+    {
+      found = &candidate;
+    }
+  }
+  if (!found)
+  {
+    throw UsageError(
+      what + ": unknown region type '" + type + "'; use box, sphere, cylinder or slab");
+  }
+  region.Type = type;
+  const std::vector<std::string> items = SplitList(text.substr(first + 1, second - first - 1), ',',
+    what, "the numbers of " + std::string(found->Form));
+  for (const std::string& item : items)
+  {
+    region.Values.push_back(ParseReal(item, what + " " + type));
+  }
+  if (region.Values.size() != found->Count)
+  {
+    throw UsageError(what + ": " + found->Form + " needs " + std::to_string(found->Count) +
+      " numbers, got " + std::to_string(region.Values.size()));
+  }
+  const std::vector<double>& v = region.Values;
+  if (type == "box")
+  {
+    if (!(v[0] < v[3] && v[1] < v[4] && v[2] < v[5]))
+    {
+      throw UsageError(what + ": degenerate box in '" + text +
+        "'; box:X0,Y0,Z0,X1,Y1,Z1 needs X0 < X1, Y0 < Y1 and Z0 < Z1");
+    }
+  }
+  else if (type == "sphere" || type == "cylinder")
+  {
+    if (type == "cylinder" && v[3] == 0 && v[4] == 0 && v[5] == 0)
+    {
+      throw UsageError(what + ": the cylinder axis AX,AY,AZ is zero");
+    }
+    if (!(v.back() > 0))
+    {
+      throw UsageError(what + ": the " + type + " radius must be positive, got " + items.back());
+    }
+  }
+  else // slab
+  {
+    if (v[3] == 0 && v[4] == 0 && v[5] == 0)
+    {
+      throw UsageError(what + ": the slab normal NX,NY,NZ is zero");
+    }
+    if (!(v[6] > 0))
+    {
+      throw UsageError(what + ": the slab width must be positive, got " + items.back());
+    }
+  }
+  const std::string value = Trim(text.substr(second + 1));
+  if (balanceLevel)
+  {
+    region.Level = static_cast<int>(ParseInteger(value, what + " level", 1, MaxBalanceLevel));
+  }
+  else
+  {
+    region.Size = ParseReal(value, what + " size");
+    if (!(region.Size > 0))
+    {
+      throw UsageError(what + ": SIZE must be positive, got " + value);
+    }
+  }
+  return region;
+}
+
 Options ParseCommandLine(int argc, char* argv[])
 {
   Options options;
@@ -420,7 +780,9 @@ Options ParseCommandLine(int argc, char* argv[])
       inlineValue = true;
     }
     static const std::set<std::string> valueOptions = { "-o", "--labels", "--max-cell-size",
-      "--balance", "--stop-after", "--threads", "--summary", "--compressor" };
+      "--balance", "--stop-after", "--threads", "--summary", "--compressor", "--pattern",
+      "--root-cell-size", "--max-cell-size-label", "--refine-region", "--grading", "--sizing-array",
+      "--balance-label", "--balance-region" };
     if (valueOptions.count(name) == 0)
     {
       throw UsageError("unknown option '" + name + "'");
@@ -498,6 +860,59 @@ Options ParseCommandLine(int argc, char* argv[])
       }
       options.SummaryPath = value;
     }
+    else if (name == "--pattern")
+    {
+      options.Pattern = ParsePattern(value, options.PatternCounts);
+    }
+    else if (name == "--root-cell-size")
+    {
+      options.RootCellSize = ParseRootCellSize(value);
+    }
+    else if (name == "--max-cell-size-label")
+    {
+      options.LabelMaxCellSizes = ParseLabelMaxCellSizes(value);
+    }
+    else if (name == "--refine-region")
+    {
+      options.RefineRegion = ParseRegion(value, name, false);
+    }
+    else if (name == "--grading")
+    {
+      options.Grading = ParseReal(value, name);
+      if (!(options.Grading >= MinimumGrading))
+      {
+        throw UsageError("--grading: G must be at least 1.5, got " + value);
+      }
+    }
+    else if (name == "--sizing-array")
+    {
+      if (value.empty())
+      {
+        throw UsageError("--sizing-array needs an array name");
+      }
+      options.SizingArray = value;
+    }
+    else if (name == "--balance-label")
+    {
+      options.LabelBalanceLevels = ParseLabelBalanceLevels(value);
+    }
+    else if (name == "--balance-region")
+    {
+      options.BalanceRegion = ParseRegion(value, name, true);
+    }
+  }
+
+  if (!options.RootCellSize.empty() && seenOptions.count("--max-cell-size"))
+  {
+    throw UsageError("--root-cell-size and --max-cell-size exclude each other: the root cell "
+                     "size replaces the largest cell size");
+  }
+  if (options.BalanceLevel == 0 &&
+    (!options.LabelBalanceLevels.empty() || !options.BalanceRegion.Type.empty()))
+  {
+    throw UsageError(
+      std::string(options.LabelBalanceLevels.empty() ? "--balance-region" : "--balance-label") +
+      " needs balancing and cannot be combined with --balance 0");
   }
 
   MeshFormat format;
@@ -902,6 +1317,9 @@ struct ImageInfo
   double Spacing[3] = { 0.0, 0.0, 0.0 };
   std::string ScalarType;
   std::string Format;
+  bool CellLabels = false;              // labels are cell data (else point data)
+  int VoxelDimensions[3] = { 0, 0, 0 }; // one voxel per point, or per cell
+  std::vector<int> SpannedAxes;         // the axes with more than one voxel
 };
 
 void CheckReadableFile(const std::string& path)
@@ -1015,6 +1433,16 @@ vtkSmartPointer<vtkImageData> ReadImage(
   {
     labels = image->GetCellData()->GetScalars();
     expectedValues = image->GetNumberOfCells();
+    info.CellLabels = true;
+  }
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    info.VoxelDimensions[axis] =
+      info.CellLabels ? std::max(1, info.Dimensions[axis] - 1) : info.Dimensions[axis];
+    if (info.VoxelDimensions[axis] > 1)
+    {
+      info.SpannedAxes.push_back(axis);
+    }
   }
   if (!labels)
   {
@@ -1093,6 +1521,258 @@ vtkSmartPointer<vtkUnstructuredGrid> RunStage(vtkAlgorithm* filter, vtkDataObjec
   report.Description = description.str();
   report.PeakRssMiB = PeakRssMiB();
   return copy;
+}
+
+//------------------------------------------------------------------------------------------------
+// The spacetree options: regions, size criteria and balance levels.
+
+/// The implicit function of a region. A slab is a plane with a band of its width around it for
+/// the refinement region (bandWidth), and the intersection of its two bounding half-spaces for
+/// the balance region, which has no band.
+vtkSmartPointer<vtkImplicitFunction> MakeRegion(
+  const RegionOption& region, bool slabAsBand, double& bandWidth)
+{
+  const std::vector<double>& v = region.Values;
+  bandWidth = 0.0;
+  if (region.Type == "box")
+  {
+    vtkNew<vtkBox> box;
+    box->SetBounds(v[0], v[3], v[1], v[4], v[2], v[5]);
+    return box.GetPointer();
+  }
+  if (region.Type == "sphere")
+  {
+    vtkNew<vtkSphere> sphere;
+    sphere->SetCenter(v[0], v[1], v[2]);
+    sphere->SetRadius(v[3]);
+    return sphere.GetPointer();
+  }
+  if (region.Type == "cylinder")
+  {
+    vtkNew<vtkCylinder> cylinder;
+    cylinder->SetCenter(v[0], v[1], v[2]);
+    cylinder->SetAxis(v[3], v[4], v[5]); // normalised by vtkCylinder
+    cylinder->SetRadius(v[6]);
+    return cylinder.GetPointer();
+  }
+  // A slab. vtkPlane's value is the dot product with the normal as given: a unit normal makes
+  // it the signed distance, so that the width is in physical units.
+  const double length = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+  const double normal[3] = { v[3] / length, v[4] / length, v[5] / length };
+  const double halfWidth = 0.5 * v[6];
+  if (slabAsBand)
+  {
+    vtkNew<vtkPlane> plane;
+    plane->SetOrigin(v[0], v[1], v[2]);
+    plane->SetNormal(normal[0], normal[1], normal[2]);
+    bandWidth = v[6];
+    return plane.GetPointer();
+  }
+  vtkNew<vtkImplicitBoolean> slab;
+  slab->SetOperationTypeToIntersection(); // the largest value: inside both half-spaces
+  for (const double side : { 1.0, -1.0 })
+  {
+    vtkNew<vtkPlane> plane;
+    plane->SetOrigin(v[0] + side * halfWidth * normal[0], v[1] + side * halfWidth * normal[1],
+      v[2] + side * halfWidth * normal[2]);
+    plane->SetNormal(side * normal[0], side * normal[1], side * normal[2]);
+    slab->AddFunction(plane);
+  }
+  return slab.GetPointer();
+}
+
+std::string DimensionText(const ImageInfo& info)
+{
+  return std::to_string(info.VoxelDimensions[0]) + " x " + std::to_string(info.VoxelDimensions[1]) +
+    " x " + std::to_string(info.VoxelDimensions[2]) + " voxels";
+}
+
+/// Sets the spacetree options of the command line on the filter. The options that depend on the
+/// image's dimension (two or three numbers) are checked here, as usage errors.
+void ConfigureSpacetree(stmImageToSpacetree* spacetree, const Options& options, vtkImageData* image,
+  const ImageInfo& info)
+{
+  for (int label : options.Labels)
+  {
+    spacetree->AddBodyLabel(label);
+  }
+  spacetree->SetMaxCellSize(options.MaxCellSize);
+  const bool threeD = info.SpannedAxes.size() == 3;
+  if (options.PatternCounts == 2 && threeD)
+  {
+    throw UsageError("--pattern: the image is 3D (" + DimensionText(info) +
+      "); give three split counts per entry, such as 2x2x2");
+  }
+  spacetree->SetRefinementPattern(options.Pattern.c_str());
+  if (!options.RootCellSize.empty())
+  {
+    int sizes[3] = { 0, 0, 0 };
+    if (options.RootCellSize.size() == 3)
+    {
+      std::copy(options.RootCellSize.begin(), options.RootCellSize.end(), sizes);
+    }
+    else if (info.SpannedAxes.size() == 2)
+    {
+      // X,Y of a 2D image: the two axes it spans; the flat axis has one voxel.
+      sizes[0] = sizes[1] = sizes[2] = 1;
+      sizes[info.SpannedAxes[0]] = options.RootCellSize[0];
+      sizes[info.SpannedAxes[1]] = options.RootCellSize[1];
+    }
+    else
+    {
+      throw UsageError(
+        "--root-cell-size: the image is 3D (" + DimensionText(info) + "); give three sizes X,Y,Z");
+    }
+    spacetree->SetRootCellSize(sizes);
+  }
+  for (const auto& entry : options.LabelMaxCellSizes)
+  {
+    spacetree->SetLabelMaxCellSize(entry.first, entry.second);
+  }
+  if (!options.RefineRegion.Type.empty())
+  {
+    double bandWidth = 0.0;
+    spacetree->SetRefinementRegion(MakeRegion(options.RefineRegion, true, bandWidth));
+    spacetree->SetRegionMaxCellSize(options.RefineRegion.Size);
+    spacetree->SetRegionBandWidth(bandWidth);
+  }
+  spacetree->SetGrading(options.Grading);
+  if (!options.SizingArray.empty())
+  {
+    const std::string& name = options.SizingArray;
+    vtkDataSetAttributes* labelData = info.CellLabels
+      ? static_cast<vtkDataSetAttributes*>(image->GetCellData())
+      : static_cast<vtkDataSetAttributes*>(image->GetPointData());
+    vtkDataSetAttributes* otherData = info.CellLabels
+      ? static_cast<vtkDataSetAttributes*>(image->GetPointData())
+      : static_cast<vtkDataSetAttributes*>(image->GetCellData());
+    const char* labelKind = info.CellLabels ? "cell" : "point";
+    const char* otherKind = info.CellLabels ? "point" : "cell";
+    if (!labelData->GetAbstractArray(name.c_str()))
+    {
+      if (otherData->GetAbstractArray(name.c_str()))
+      {
+        throw Failure("--sizing-array: '" + name + "' is " + otherKind +
+          " data, but the labels are " + labelKind +
+          " data; the sizing array needs the labels' association");
+      }
+      std::string names;
+      for (int i = 0; i < labelData->GetNumberOfArrays(); ++i)
+      {
+        const char* arrayName = labelData->GetArrayName(i);
+        names += std::string(names.empty() ? "" : ", ") + "'" + (arrayName ? arrayName : "") + "'";
+      }
+      throw Failure("--sizing-array: the image has no " + std::string(labelKind) +
+        " array named '" + name + "' (its " + labelKind +
+        " arrays: " + (names.empty() ? "none" : names) + ")");
+    }
+    if (!labelData->GetArray(name.c_str()))
+    {
+      throw Failure("--sizing-array: '" + name + "' is not a numeric array");
+    }
+    spacetree->SetUseSizingArray(true);
+    spacetree->SetInputArrayToProcess(1, 0, 0,
+      info.CellLabels ? vtkDataObject::FIELD_ASSOCIATION_CELLS
+                      : vtkDataObject::FIELD_ASSOCIATION_POINTS,
+      name.c_str());
+  }
+}
+
+void ConfigureBalance(stmSpacetreeBalance* balance, const Options& options,
+  vtkSmartPointer<vtkImplicitFunction>& region)
+{
+  balance->SetBalanceLevel(options.BalanceLevel);
+  for (const auto& entry : options.LabelBalanceLevels)
+  {
+    balance->SetLabelBalanceLevel(entry.first, entry.second);
+  }
+  if (!options.BalanceRegion.Type.empty())
+  {
+    double bandWidth = 0.0;
+    region = MakeRegion(options.BalanceRegion, false, bandWidth);
+    balance->SetBalanceRegion(region);
+    balance->SetRegionBalanceLevel(options.BalanceRegion.Level);
+  }
+}
+
+/// Whether the centre of some leaf of a spacetree dataset (the mean of its corners) is in the
+/// region, as stmSpacetreeBalance decides it.
+bool RegionHoldsLeafCentre(vtkUnstructuredGrid* grid, vtkImplicitFunction* region)
+{
+  vtkPoints* points = grid->GetPoints();
+  if (!points)
+  {
+    return false;
+  }
+  vtkNew<vtkIdList> corners;
+  for (vtkIdType cell = 0; cell < grid->GetNumberOfCells(); ++cell)
+  {
+    grid->GetCellPoints(cell, corners);
+    double centre[3] = { 0.0, 0.0, 0.0 };
+    for (vtkIdType i = 0; i < corners->GetNumberOfIds(); ++i)
+    {
+      double x[3];
+      points->GetPoint(corners->GetId(i), x);
+      for (int c = 0; c < 3; ++c)
+      {
+        centre[c] += x[c] / static_cast<double>(corners->GetNumberOfIds());
+      }
+    }
+    if (region->FunctionValue(centre) <= 0)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
+/// The level table of a spacetree dataset: the cell edges per level, root first, and the
+/// lattice units per voxel, per axis the spacetree spans.
+struct LevelTable
+{
+  bool Present = false;
+  std::vector<int> ImageAxes;
+  std::vector<int> VoxelSubdivision;
+  std::vector<std::vector<int>> CellSizes; // lattice units
+};
+
+LevelTable ReadLevelTable(vtkUnstructuredGrid* grid)
+{
+  LevelTable table;
+  vtkFieldData* fd = grid->GetFieldData();
+  vtkDataArray* sizes = fd->GetArray("SpacetreeCellSizes");
+  vtkDataArray* subdivision = fd->GetArray("SpacetreeVoxelSubdivision");
+  vtkDataArray* axes = fd->GetArray("SpacetreeImageAxes");
+  if (!sizes || !subdivision || !axes)
+  {
+    return table;
+  }
+  const vtkIdType dimension = subdivision->GetNumberOfValues();
+  if (dimension < 1 || axes->GetNumberOfValues() != dimension ||
+    sizes->GetNumberOfValues() % dimension != 0)
+  {
+    return table;
+  }
+  for (vtkIdType axis = 0; axis < dimension; ++axis)
+  {
+    table.VoxelSubdivision.push_back(static_cast<int>(subdivision->GetVariantValue(axis).ToInt()));
+    table.ImageAxes.push_back(static_cast<int>(axes->GetVariantValue(axis).ToInt()));
+    if (table.VoxelSubdivision.back() < 1)
+    {
+      return LevelTable();
+    }
+  }
+  for (vtkIdType level = 0; level < sizes->GetNumberOfValues() / dimension; ++level)
+  {
+    std::vector<int> size;
+    for (vtkIdType axis = 0; axis < dimension; ++axis)
+    {
+      size.push_back(sizes->GetVariantValue(level * dimension + axis).ToInt());
+    }
+    table.CellSizes.push_back(size);
+  }
+  table.Present = true;
+  return table;
 }
 
 //------------------------------------------------------------------------------------------------
@@ -1276,6 +1956,57 @@ std::string JsonCount(long long value)
   return value < 0 ? std::string("null") : std::to_string(value);
 }
 
+/// A number as JSON: integers without a fraction, others with up to 10 significant digits.
+std::string JsonNumber(double value)
+{
+  char text[32];
+  if (value == std::floor(value) && std::abs(value) < 1e15)
+  {
+    std::snprintf(text, sizeof(text), "%.0f", value);
+  }
+  else
+  {
+    std::snprintf(text, sizeof(text), "%.10g", value);
+  }
+  return text;
+}
+
+template <class Number>
+std::string JsonList(const std::vector<Number>& values)
+{
+  std::string text = "[";
+  for (std::size_t i = 0; i < values.size(); ++i)
+  {
+    text += (i ? ", " : "") + JsonNumber(static_cast<double>(values[i]));
+  }
+  return text + "]";
+}
+
+/// {"3": 2, "7": 8}: values per label.
+template <class Number>
+std::string JsonLabelMap(const std::vector<std::pair<int, Number>>& entries)
+{
+  std::string text = "{";
+  for (std::size_t i = 0; i < entries.size(); ++i)
+  {
+    text += (i ? ", " : "") + JsonString(std::to_string(entries[i].first)) + ": " +
+      JsonNumber(static_cast<double>(entries[i].second));
+  }
+  return text + "}";
+}
+
+std::string JsonRegion(const RegionOption& region, bool balanceLevel)
+{
+  if (region.Type.empty())
+  {
+    return "null";
+  }
+  return "{\"type\": " + JsonString(region.Type) + ", \"values\": " + JsonList(region.Values) +
+    (balanceLevel ? ", \"level\": " + std::to_string(region.Level)
+                  : ", \"size\": " + JsonNumber(region.Size)) +
+    "}";
+}
+
 struct RunSummary
 {
   std::string Input;
@@ -1287,6 +2018,7 @@ struct RunSummary
   double TotalSeconds = 0.0;
   std::string MaterialKey;
   std::map<long long, long long> CellsPerMaterial;
+  LevelTable Levels;
 };
 
 void WriteSummary(const std::string& path, const Options& options, const RunSummary& summary)
@@ -1314,9 +2046,45 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
        << ", \"max_cell_size\": " << options.MaxCellSize
        << ", \"balance\": " << options.BalanceLevel
        << ", \"stop_after\": " << JsonString(StopStageName(options.StopAfter))
-       << ", \"compressor\": " << JsonString(options.Compressor) << "},\n";
+       << ", \"compressor\": " << JsonString(options.Compressor)
+       << ", \"pattern\": " << JsonString(options.Pattern) << ", \"root_cell_size\": "
+       << (options.RootCellSize.empty() ? "null" : JsonList(options.RootCellSize))
+       << ", \"max_cell_size_labels\": " << JsonLabelMap(options.LabelMaxCellSizes)
+       << ", \"refine_region\": " << JsonRegion(options.RefineRegion, false)
+       << ", \"grading\": " << (options.Grading > 0 ? JsonNumber(options.Grading) : "null")
+       << ", \"sizing_array\": "
+       << (options.SizingArray.empty() ? "null" : JsonString(options.SizingArray))
+       << ", \"balance_labels\": " << JsonLabelMap(options.LabelBalanceLevels)
+       << ", \"balance_region\": " << JsonRegion(options.BalanceRegion, true) << "},\n";
   json << "  \"threads\": " << summary.Threads.Threads << ",\n";
   json << "  \"smp_backend\": " << JsonString(summary.Threads.Backend) << ",\n";
+  // The spacetree's levels: cell edges in voxels per level, root first, along the image axes the
+  // spacetree spans; fractional below the voxel (voxel_subdivision lattice units per voxel).
+  const LevelTable& levels = summary.Levels;
+  json << "  \"spacetree_axes\": " << (levels.Present ? JsonList(levels.ImageAxes) : "null")
+       << ",\n";
+  json << "  \"voxel_subdivision\": "
+       << (levels.Present ? JsonList(levels.VoxelSubdivision) : "null") << ",\n";
+  json << "  \"cell_sizes_voxels\": ";
+  if (levels.Present)
+  {
+    json << "[";
+    for (std::size_t level = 0; level < levels.CellSizes.size(); ++level)
+    {
+      std::vector<double> voxels;
+      for (std::size_t axis = 0; axis < levels.CellSizes[level].size(); ++axis)
+      {
+        voxels.push_back(static_cast<double>(levels.CellSizes[level][axis]) /
+          static_cast<double>(levels.VoxelSubdivision[axis]));
+      }
+      json << (level ? ", " : "") << JsonList(voxels);
+    }
+    json << "],\n";
+  }
+  else
+  {
+    json << "null,\n";
+  }
   json << "  \"stages\": [\n";
   for (std::size_t i = 0; i < summary.Stages.size(); ++i)
   {
@@ -1429,15 +2197,12 @@ int Run(const Options& options)
   vtkSmartPointer<vtkUnstructuredGrid> grid;
   {
     vtkNew<stmImageToSpacetree> spacetree;
-    for (int label : options.Labels)
-    {
-      spacetree->AddBodyLabel(label);
-    }
-    spacetree->SetMaxCellSize(options.MaxCellSize);
+    ConfigureSpacetree(spacetree, options, image, summary.Image);
     grid = RunStage(spacetree, image, "building the spacetree", spacetreeReport, true);
   }
   image = nullptr; // the image is no longer needed: free it before the next stages
   summary.Stages.push_back(spacetreeReport);
+  summary.Levels = ReadLevelTable(grid);
 
   if (options.StopAfter != StopStage::Spacetree)
   {
@@ -1451,8 +2216,15 @@ int Run(const Options& options)
     else
     {
       vtkNew<stmSpacetreeBalance> balance;
-      balance->SetBalanceLevel(options.BalanceLevel);
+      vtkSmartPointer<vtkImplicitFunction> region;
+      ConfigureBalance(balance, options, region);
       grid = RunStage(balance, grid, "balancing the spacetree", balanceReport, true);
+      if (region && !RegionHoldsLeafCentre(grid, region))
+      {
+        Diagnostics() << "stmesh: warning: --balance-region contains no leaf centre of the "
+                         "balanced spacetree (it lies outside the image or is smaller than the "
+                         "leaves there); it had no effect\n";
+      }
     }
     summary.Stages.push_back(balanceReport);
   }

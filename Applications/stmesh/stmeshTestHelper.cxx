@@ -2,12 +2,18 @@
 /**
  * stmeshTestHelper: test support for the stmesh command-line tests (TestStmesh.py).
  *
- *   stmeshTestHelper readback MESH.vtu|MESH.vtk
+ *   stmeshTestHelper readback MESH.vtu|MESH.vtk [geometry]
  *     reads a mesh written by stmesh and prints one JSON object: cell and point counts, the
- *     distinct cell types, the cell array names and the cells per value of "Material".
- *   stmeshTestHelper make-image IMAGE TYPE
+ *     distinct cell types, the cell array names and the cells per value of "Material". With
+ *     "geometry" also the total measure (volume, or area of triangles) per material of the
+ *     simplices (signed for tetrahedra) and the smallest one, and the longest and shortest
+ *     cell edge (the extent of a cell's bounding box along one axis) per material.
+ *   stmeshTestHelper make-image IMAGE TYPE [VARIANT]
  *     writes a small 3D label image (labels 0, 1, 2, 7) with scalar TYPE uint8, int16 or float,
  *     as .vti, .mha, .mhd, .nii, .nii.gz or .nrrd (chosen by extension, case-insensitive).
+ *     VARIANT "2d" writes one slice of it (20 x 18 x 1 voxels); "sizing" adds the point arrays
+ *     "sizing" (2.0 everywhere) and "bad_sizing" (0 at i = 0, else 1.0) and the cell array
+ *     "cell_sizing" (1.0) for the --sizing-array tests (only .vti keeps them).
  *
  * Exit code 0 on success, 1 on any error (also any VTK error), with a message on stderr.
  */
@@ -16,11 +22,14 @@
 #include "vtkCellData.h"
 #include "vtkCommand.h"
 #include "vtkDataArray.h"
+#include "vtkFloatArray.h"
+#include "vtkIdList.h"
 #include "vtkImageData.h"
 #include "vtkMetaImageWriter.h"
 #include "vtkNIFTIImageWriter.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
+#include "vtkPoints.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkUnstructuredGridReader.h"
 #include "vtkXMLImageDataWriter.h"
@@ -28,9 +37,12 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstring>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <set>
 #include <string>
@@ -66,7 +78,7 @@ bool EndsWith(const std::string& text, const std::string& suffix)
     text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-int ReadBack(const std::string& path)
+int ReadBack(const std::string& path, bool geometry)
 {
   const std::string lower = LowerCase(path);
   vtkUnstructuredGrid* grid = nullptr;
@@ -103,11 +115,74 @@ int ReadBack(const std::string& path)
     cellTypes.insert(grid->GetCellType(cell));
   }
   std::map<long long, long long> materialCounts;
-  if (vtkDataArray* materials = grid->GetCellData()->GetArray("Material"))
+  std::map<long long, double> measures;
+  std::map<long long, double> longestEdges;
+  std::map<long long, double> shortestEdges;
+  double smallestMeasure = std::numeric_limits<double>::infinity();
+  vtkDataArray* materials = grid->GetCellData()->GetArray("Material");
+  if (materials && grid->GetPoints())
   {
+    vtkNew<vtkIdList> ids;
     for (vtkIdType cell = 0; cell < materials->GetNumberOfTuples(); ++cell)
     {
-      ++materialCounts[static_cast<long long>(materials->GetTuple1(cell))];
+      const long long material = static_cast<long long>(materials->GetTuple1(cell));
+      ++materialCounts[material];
+      if (!geometry)
+      {
+        continue;
+      }
+      grid->GetCellPoints(cell, ids);
+      double p[8][3];
+      const vtkIdType n = std::min<vtkIdType>(ids->GetNumberOfIds(), 8);
+      double low[3] = { VTK_DOUBLE_MAX, VTK_DOUBLE_MAX, VTK_DOUBLE_MAX };
+      double high[3] = { VTK_DOUBLE_MIN, VTK_DOUBLE_MIN, VTK_DOUBLE_MIN };
+      for (vtkIdType i = 0; i < n; ++i)
+      {
+        grid->GetPoints()->GetPoint(ids->GetId(i), p[i]);
+        for (int c = 0; c < 3; ++c)
+        {
+          low[c] = std::min(low[c], p[i][c]);
+          high[c] = std::max(high[c], p[i][c]);
+        }
+      }
+      // The edge of an axis-aligned leaf; for a simplex, its bounding box's longest side.
+      double longest = 0.0;
+      double shortest = VTK_DOUBLE_MAX;
+      for (int c = 0; c < 3; ++c)
+      {
+        longest = std::max(longest, high[c] - low[c]);
+        if (high[c] - low[c] > 0)
+        {
+          shortest = std::min(shortest, high[c] - low[c]);
+        }
+      }
+      longestEdges[material] = std::max(longestEdges[material], longest);
+      shortestEdges[material] =
+        shortestEdges.count(material) ? std::min(shortestEdges[material], shortest) : shortest;
+      double a[3], b[3], c[3];
+      for (int k = 0; k < 3; ++k)
+      {
+        a[k] = p[1][k] - p[0][k];
+        b[k] = p[2][k] - p[0][k];
+        c[k] = n > 3 ? p[3][k] - p[0][k] : 0.0;
+      }
+      const double cross[3] = { a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0] };
+      double measure = 0.0;
+      if (grid->GetCellType(cell) == VTK_TETRA)
+      {
+        measure = (cross[0] * c[0] + cross[1] * c[1] + cross[2] * c[2]) / 6.0;
+      }
+      else if (grid->GetCellType(cell) == VTK_TRIANGLE)
+      {
+        measure = 0.5 * std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+      }
+      else
+      {
+        continue;
+      }
+      measures[material] += measure;
+      smallestMeasure = std::min(smallestMeasure, measure);
     }
   }
 
@@ -132,7 +207,37 @@ int ReadBack(const std::string& path)
     std::cout << (first ? "" : ", ") << '"' << entry.first << "\": " << entry.second;
     first = false;
   }
-  std::cout << "}}\n";
+  std::cout << "}" << std::setprecision(15);
+  if (!geometry)
+  {
+    std::cout << "}\n";
+    return 0;
+  }
+  const std::pair<const char*, const std::map<long long, double>*> perMaterial[] = {
+    { "material_measures", &measures }, { "longest_edges", &longestEdges },
+    { "shortest_edges", &shortestEdges }
+  };
+  for (const auto& entries : perMaterial)
+  {
+    std::cout << ", \"" << entries.first << "\": {";
+    first = true;
+    for (const auto& entry : *entries.second)
+    {
+      std::cout << (first ? "" : ", ") << '"' << entry.first << "\": " << entry.second;
+      first = false;
+    }
+    std::cout << "}";
+  }
+  std::cout << ", \"smallest_measure\": ";
+  if (measures.empty())
+  {
+    std::cout << "null";
+  }
+  else
+  {
+    std::cout << smallestMeasure;
+  }
+  std::cout << "}\n";
   return 0;
 }
 
@@ -177,8 +282,15 @@ bool WriteNrrd(vtkImageData* image, const std::string& path, const char* nrrdTyp
   return static_cast<bool>(file);
 }
 
-int MakeImage(const std::string& path, const std::string& typeName)
+int MakeImage(const std::string& path, const std::string& typeName, const std::string& variant)
 {
+  if (variant != "plain" && variant != "2d" && variant != "sizing")
+  {
+    std::cerr << "stmeshTestHelper: VARIANT must be 2d or sizing\n";
+    return 1;
+  }
+  const bool flat = variant == "2d";
+  const int slices = flat ? 1 : 16;
   int scalarType = VTK_UNSIGNED_CHAR;
   const char* nrrdType = "uint8";
   if (typeName == "int16")
@@ -198,22 +310,43 @@ int MakeImage(const std::string& path, const std::string& typeName)
   }
 
   vtkNew<vtkImageData> image;
-  image->SetDimensions(20, 18, 16);
+  image->SetDimensions(20, 18, slices);
   image->AllocateScalars(scalarType, 1);
   vtkDataArray* scalars = image->GetPointData()->GetScalars();
   scalars->SetName("labels");
   vtkIdType index = 0;
-  for (int k = 0; k < 16; ++k)
+  for (int k = 0; k < slices; ++k)
   {
     for (int j = 0; j < 18; ++j)
     {
       for (int i = 0; i < 20; ++i)
       {
         // A float image gets fractional values, as a gray-value image would.
-        const double value = TestLabel(i, j, k) + (scalarType == VTK_FLOAT ? 0.25 : 0.0);
+        const double value = TestLabel(i, j, flat ? 8 : k) + (scalarType == VTK_FLOAT ? 0.25 : 0.0);
         scalars->SetTuple1(index++, value);
       }
     }
+  }
+  if (variant == "sizing")
+  {
+    vtkNew<vtkFloatArray> sizing;
+    sizing->SetName("sizing");
+    sizing->SetNumberOfValues(image->GetNumberOfPoints());
+    sizing->Fill(2.0);
+    image->GetPointData()->AddArray(sizing);
+    vtkNew<vtkFloatArray> badSizing;
+    badSizing->SetName("bad_sizing");
+    badSizing->SetNumberOfValues(image->GetNumberOfPoints());
+    for (vtkIdType point = 0; point < image->GetNumberOfPoints(); ++point)
+    {
+      badSizing->SetValue(point, point % 20 == 0 ? 0.0f : 1.0f);
+    }
+    image->GetPointData()->AddArray(badSizing);
+    vtkNew<vtkFloatArray> cellSizing;
+    cellSizing->SetName("cell_sizing");
+    cellSizing->SetNumberOfValues(image->GetNumberOfCells());
+    cellSizing->Fill(1.0);
+    image->GetCellData()->AddArray(cellSizing);
   }
 
   const std::string lower = LowerCase(path);
@@ -266,16 +399,17 @@ int MakeImage(const std::string& path, const std::string& typeName)
 
 int main(int argc, char* argv[])
 {
-  if (argc == 3 && std::strcmp(argv[1], "readback") == 0)
+  if ((argc == 3 || (argc == 4 && std::strcmp(argv[3], "geometry") == 0)) &&
+    std::strcmp(argv[1], "readback") == 0)
   {
-    return ReadBack(argv[2]);
+    return ReadBack(argv[2], argc == 4);
   }
-  if (argc == 4 && std::strcmp(argv[1], "make-image") == 0)
+  if ((argc == 4 || argc == 5) && std::strcmp(argv[1], "make-image") == 0)
   {
-    return MakeImage(argv[2], argv[3]);
+    return MakeImage(argv[2], argv[3], argc == 5 ? argv[4] : "plain");
   }
-  std::cerr << "usage: stmeshTestHelper readback MESH.vtu|MESH.vtk\n"
+  std::cerr << "usage: stmeshTestHelper readback MESH.vtu|MESH.vtk [geometry]\n"
                "       stmeshTestHelper make-image IMAGE.(vti|mha|mhd|nii|nii.gz|nrrd) "
-               "uint8|int16|float\n";
+               "uint8|int16|float [2d|sizing]\n";
   return 1;
 }

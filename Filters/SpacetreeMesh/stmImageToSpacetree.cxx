@@ -4,6 +4,8 @@
 #include "stmSMPExecutor.h"
 #include "stmSpacetreeData.h"
 
+#include "Balance/SpacetreeGrading.h"
+#include "Spacetree/RefinementPlan.h"
 #include "Spacetree/SpacetreeBuild.h"
 
 #include "vtkArrayDispatch.h"
@@ -12,6 +14,7 @@
 #include "vtkDataObject.h"
 #include "vtkDataSetAttributes.h"
 #include "vtkImageData.h"
+#include "vtkImplicitFunction.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
 #include "vtkMatrix3x3.h"
@@ -21,6 +24,7 @@
 #include "vtkUnstructuredGrid.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -127,27 +131,171 @@ struct MapToMaterials
   }
 };
 
+/// Everything the tree construction needs besides the material image.
+struct RefinementRequest
+{
+  std::string Pattern;
+  int RootCellSize[3];
+  int MaxCellSize;
+  /// Largest leaf edge in voxels per material index; 0 for none.
+  std::vector<double> MaterialMaxCellSizes;
+  /// Per voxel: inside the refinement region; empty without a region.
+  std::vector<unsigned char> InRegion;
+  double RegionMaxCellSize;
+  /// Per voxel: the sizing field; empty without one.
+  std::vector<double> Sizing;
+  double Grading;
+};
+
+/// Largest number of lattice cells (voxels times their subdivision) the dense level maps of
+/// the later stages are allowed to cover.
+constexpr std::int64_t MaximumLatticeCells = std::int64_t{ 1 } << 30;
+
 template <int Dim>
 bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxelDims[3],
-  const stmSpacetreeGeometry& geometry, const std::vector<long long>& materialLabels,
-  int maxCellSize, stmSMPExecutor& executor, vtkUnstructuredGrid* output, std::string& error)
+  stmSpacetreeGeometry geometry, const std::vector<long long>& materialLabels,
+  const RefinementRequest& request, stmSMPExecutor& executor, vtkUnstructuredGrid* output,
+  std::string& error)
 {
   stm::MaterialImage<Dim> image;
+  stm::RefinementPlanOptions<Dim> planOptions;
   for (int axis = 0; axis < Dim; ++axis)
   {
-    image.Dimensions[axis] = voxelDims[geometry.ImageAxes[axis]];
+    const int imageAxis = geometry.ImageAxes[axis];
+    image.Dimensions[axis] = voxelDims[imageAxis];
+    const double* vector = geometry.AxisVectors[imageAxis];
+    planOptions.Spacing[axis] =
+      std::sqrt(vector[0] * vector[0] + vector[1] * vector[1] + vector[2] * vector[2]);
   }
   image.Values = materials.data();
-  stm::SpacetreeBuildOptions options;
-  options.MaxCellSize = maxCellSize;
-  stm::Spacetree<Dim> tree;
-  const std::vector<std::int64_t> labels(materialLabels.begin(), materialLabels.end());
-  const stm::Status status =
-    stm::SpacetreeBuilder<Dim>().Build(image, labels, options, tree, executor);
+
+  // The pattern, per spacetree axis: three counts per image axis, or Dim counts.
+  std::vector<std::vector<int>> entries;
+  std::string parseError;
+  bool perImageAxis = stm::ParseRefinementPattern(request.Pattern, 3, entries, parseError);
+  if (!perImageAxis &&
+    (Dim == 3 || !stm::ParseRefinementPattern(request.Pattern, Dim, entries, error)))
+  {
+    error = parseError;
+    return false;
+  }
+  for (const auto& entry : entries)
+  {
+    stm::SplitCounts<Dim> counts;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      counts[axis] = entry[perImageAxis ? geometry.ImageAxes[axis] : axis];
+    }
+    planOptions.Pattern.push_back(counts);
+  }
+  bool rootGiven = false;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    planOptions.RootCellSize[axis] = request.RootCellSize[geometry.ImageAxes[axis]];
+    rootGiven = rootGiven || planOptions.RootCellSize[axis] != 0;
+  }
+  for (int axis = 0; axis < Dim && rootGiven; ++axis)
+  {
+    if (planOptions.RootCellSize[axis] <= 0)
+    {
+      error = "RootCellSize must be positive on every axis the image spans (or 0 on all)";
+      return false;
+    }
+  }
+  planOptions.MaxCellSize = request.MaxCellSize;
+  double finest = request.InRegion.empty() ? 0.0 : request.RegionMaxCellSize;
+  for (double size : request.Sizing)
+  {
+    finest = finest > 0 ? std::min(finest, size) : size;
+  }
+  planOptions.FinestSize = finest;
+  stm::RefinementPlan<Dim> plan;
+  stm::Status status = stm::PlanRefinement<Dim>(image.Dimensions, planOptions, plan);
   if (!status.IsOk())
   {
     error = status.GetMessage();
     return false;
+  }
+  std::int64_t latticeCells = 1;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    latticeCells *= image.Dimensions[axis] * plan.VoxelSubdivision[axis];
+  }
+  if (latticeCells > MaximumLatticeCells)
+  {
+    error = "refinement below the voxel size makes the lattice too large (" +
+      std::to_string(latticeCells) + " cells, at most " + std::to_string(MaximumLatticeCells) +
+      "); ask for a larger size or crop the image";
+    return false;
+  }
+
+  // The size criteria, as the coarsest level allowed at each voxel.
+  std::vector<std::uint8_t> minimumLevels;
+  const bool labelSizes = std::any_of(request.MaterialMaxCellSizes.begin(),
+    request.MaterialMaxCellSizes.end(), [](double size) { return size > 0; });
+  if (labelSizes || !request.InRegion.empty() || !request.Sizing.empty())
+  {
+    const std::vector<double> physicalEdges = plan.LargestEdges(planOptions.Spacing);
+    const std::vector<double> voxelEdges =
+      plan.LargestEdges(stm::RefinementPlanOptions<Dim>::UnitSpacing());
+    std::vector<std::uint8_t> materialLevels(request.MaterialMaxCellSizes.size(), 0);
+    for (std::size_t m = 0; m < materialLevels.size(); ++m)
+    {
+      const double size = request.MaterialMaxCellSizes[m];
+      materialLevels[m] =
+        static_cast<std::uint8_t>(size > 0 ? plan.CoarsestLevelWithin(size, voxelEdges) : 0);
+    }
+    const auto regionLevel = static_cast<std::uint8_t>(request.InRegion.empty()
+        ? 0
+        : plan.CoarsestLevelWithin(request.RegionMaxCellSize, physicalEdges));
+    minimumLevels.resize(materials.size());
+    vtkSMPTools::For(0, static_cast<vtkIdType>(materials.size()),
+      [&](vtkIdType begin, vtkIdType end)
+      {
+        for (vtkIdType v = begin; v < end; ++v)
+        {
+          std::uint8_t level = materialLevels[materials[v]];
+          if (!request.InRegion.empty() && request.InRegion[v])
+          {
+            level = std::max(level, regionLevel);
+          }
+          if (!request.Sizing.empty())
+          {
+            level = std::max(level,
+              static_cast<std::uint8_t>(
+                plan.CoarsestLevelWithin(request.Sizing[v], physicalEdges)));
+          }
+          minimumLevels[v] = level;
+        }
+      });
+  }
+
+  stm::Spacetree<Dim> tree;
+  const std::vector<std::int64_t> labels(materialLabels.begin(), materialLabels.end());
+  status = stm::SpacetreeBuilder<Dim>().Build(
+    image, labels, plan, minimumLevels.empty() ? nullptr : minimumLevels.data(), tree, executor);
+  if (status.IsOk() && request.Grading > 0)
+  {
+    std::array<double, Dim> latticeSpacing;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      latticeSpacing[axis] = planOptions.Spacing[axis] / plan.VoxelSubdivision[axis];
+    }
+    status = stm::SpacetreeGrader<Dim>().Grade(tree, request.Grading, latticeSpacing, executor);
+  }
+  if (!status.IsOk())
+  {
+    error = status.GetMessage();
+    return false;
+  }
+  // The lattice unit is a fraction of the voxel where cells were refined below it.
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      geometry.AxisVectors[geometry.ImageAxes[axis]][c] /=
+        static_cast<double>(plan.VoxelSubdivision[axis]);
+    }
   }
   stmSpacetreeData::WriteSpacetree<Dim>(tree, geometry, output);
   return true;
@@ -183,7 +331,47 @@ stmImageToSpacetree::stmImageToSpacetree()
     0, 0, 0, vtkDataObject::FIELD_ASSOCIATION_POINTS_THEN_CELLS, vtkDataSetAttributes::SCALARS);
 }
 
-stmImageToSpacetree::~stmImageToSpacetree() = default;
+stmImageToSpacetree::~stmImageToSpacetree()
+{
+  this->SetRefinementRegion(nullptr);
+}
+
+vtkCxxSetObjectMacro(stmImageToSpacetree, RefinementRegion, vtkImplicitFunction);
+
+vtkMTimeType stmImageToSpacetree::GetMTime()
+{
+  vtkMTimeType time = this->Superclass::GetMTime();
+  if (this->RefinementRegion)
+  {
+    time = std::max(time, this->RefinementRegion->GetMTime());
+  }
+  return time;
+}
+
+void stmImageToSpacetree::SetLabelMaxCellSize(double label, double size)
+{
+  const int key = static_cast<int>(label);
+  const auto found = this->LabelMaxCellSizes.find(key);
+  if (found == this->LabelMaxCellSizes.end() || found->second != size)
+  {
+    this->LabelMaxCellSizes[key] = size;
+    this->Modified();
+  }
+}
+
+void stmImageToSpacetree::RemoveAllLabelMaxCellSizes()
+{
+  if (!this->LabelMaxCellSizes.empty())
+  {
+    this->LabelMaxCellSizes.clear();
+    this->Modified();
+  }
+}
+
+int stmImageToSpacetree::GetNumberOfLabelMaxCellSizes() const
+{
+  return static_cast<int>(this->LabelMaxCellSizes.size());
+}
 
 void stmImageToSpacetree::SetNumberOfBodyLabels(int count)
 {
@@ -255,6 +443,24 @@ void stmImageToSpacetree::PrintSelf(ostream& os, vtkIndent indent)
   os << "\n";
   os << indent << "BackgroundLabel: " << this->BackgroundLabel << "\n";
   os << indent << "MaxCellSize: " << this->MaxCellSize << "\n";
+  os << indent << "RefinementPattern: " << this->RefinementPattern << "\n";
+  os << indent << "RootCellSize: " << this->RootCellSize[0] << " " << this->RootCellSize[1] << " "
+     << this->RootCellSize[2] << "\n";
+  os << indent << "LabelMaxCellSizes:";
+  for (const auto& entry : this->LabelMaxCellSizes)
+  {
+    os << " " << entry.first << ":" << entry.second;
+  }
+  os << (this->LabelMaxCellSizes.empty() ? " (none)\n" : "\n");
+  os << indent << "RefinementRegion: " << (this->RefinementRegion ? "" : "(none)\n");
+  if (this->RefinementRegion)
+  {
+    os << this->RefinementRegion->GetClassName() << "\n";
+  }
+  os << indent << "RegionMaxCellSize: " << this->RegionMaxCellSize << "\n";
+  os << indent << "RegionBandWidth: " << this->RegionBandWidth << "\n";
+  os << indent << "Grading: " << this->Grading << "\n";
+  os << indent << "UseSizingArray: " << this->UseSizingArray << "\n";
 }
 
 int stmImageToSpacetree::FillInputPortInformation(int, vtkInformation* info)
@@ -455,14 +661,130 @@ int stmImageToSpacetree::RequestData(
     return 1;
   }
 
+  // The size criteria.
+  RefinementRequest request;
+  request.Pattern = this->RefinementPattern;
+  std::copy(this->RootCellSize, this->RootCellSize + 3, request.RootCellSize);
+  request.MaxCellSize = this->MaxCellSize;
+  request.Grading = this->Grading;
+  if (this->Grading != 0 && !(this->Grading >= 1.5))
+  {
+    vtkErrorMacro("Grading must be 0 (off) or at least 1.5, got " << this->Grading << ".");
+    return 0;
+  }
+  request.MaterialMaxCellSizes.assign(materialLabels.size(), 0.0);
+  for (const auto& entry : this->LabelMaxCellSizes)
+  {
+    const auto found = std::lower_bound(body.begin(), body.end(), entry.first);
+    if (found == body.end() || *found != entry.first)
+    {
+      vtkErrorMacro("LabelMaxCellSizes names label " << entry.first
+                                                     << ", which is not in the body of interest.");
+      return 0;
+    }
+    if (!(entry.second >= 1) || !std::isfinite(entry.second))
+    {
+      vtkErrorMacro("The largest cell size of label "
+        << entry.first << " must be at least 1 voxel, got " << entry.second
+        << " (use a refinement region or a sizing array below the voxel size).");
+      return 0;
+    }
+    request.MaterialMaxCellSizes[found - body.begin() + 1] = entry.second;
+  }
+  request.RegionMaxCellSize = this->RegionMaxCellSize;
+  if (!(this->RegionMaxCellSize >= 0) || !std::isfinite(this->RegionMaxCellSize))
+  {
+    vtkErrorMacro("RegionMaxCellSize must be positive (or 0 to disable the region), got "
+      << this->RegionMaxCellSize << ".");
+    return 0;
+  }
+  if (this->RegionMaxCellSize > 0)
+  {
+    if (!this->RefinementRegion)
+    {
+      vtkErrorMacro("RegionMaxCellSize is set but there is no RefinementRegion.");
+      return 0;
+    }
+    request.InRegion.assign(materials.size(), 0);
+    vtkImplicitFunction* region = this->RefinementRegion;
+    const double halfBand = 0.5 * this->RegionBandWidth;
+    vtkSMPTools::For(0, static_cast<vtkIdType>(materials.size()),
+      [&](vtkIdType begin, vtkIdType end)
+      {
+        for (vtkIdType v = begin; v < end; ++v)
+        {
+          double centre[3] = { 0, 0, 0 };
+          vtkIdType rest = v;
+          for (int axis = 0; axis < 3; ++axis)
+          {
+            centre[axis] = static_cast<double>(rest % voxelDims[axis]) + 0.5;
+            rest /= voxelDims[axis];
+          }
+          double lattice[3];
+          for (int i = 0; i < geometry.Dimension; ++i)
+          {
+            lattice[i] = centre[geometry.ImageAxes[i]];
+          }
+          double x[3];
+          geometry.ToPhysical(lattice, x);
+          const double value = region->FunctionValue(x);
+          request.InRegion[v] = halfBand > 0 ? std::abs(value) <= halfBand : value <= 0;
+        }
+      });
+    if (std::find(request.InRegion.begin(), request.InRegion.end(), 1) == request.InRegion.end())
+    {
+      vtkErrorMacro("The refinement region contains no voxel centre of the image: it lies "
+                    "outside the image or is thinner than a voxel.");
+      return 0;
+    }
+  }
+  if (this->UseSizingArray)
+  {
+    int sizingAssociation = -1;
+    vtkDataArray* sizing = this->GetInputArrayToProcess(1, inputVector, sizingAssociation);
+    if (!sizing || sizing->GetNumberOfComponents() != 1 ||
+      sizing->GetNumberOfTuples() != labels->GetNumberOfTuples() ||
+      sizingAssociation != association)
+    {
+      vtkErrorMacro("UseSizingArray is on, but input array 1 is not a one-component array with "
+                    "the label array's association (point or cell data).");
+      return 0;
+    }
+    request.Sizing.resize(materials.size());
+    std::atomic<bool> invalid{ false };
+    vtkSMPTools::For(0, sizing->GetNumberOfTuples(),
+      [&](vtkIdType begin, vtkIdType end)
+      {
+        for (vtkIdType v = begin; v < end; ++v)
+        {
+          const double value = sizing->GetComponent(v, 0);
+          request.Sizing[v] = value;
+          if (!(value > 0) || !std::isfinite(value))
+          {
+            invalid = true;
+          }
+        }
+      });
+    if (invalid)
+    {
+      vtkErrorMacro("The sizing array \"" << (sizing->GetName() ? sizing->GetName() : "")
+                                          << "\" holds sizes that are not positive and finite.");
+      return 0;
+    }
+  }
+  this->UpdateProgress(0.25);
+  if (this->CheckAbort())
+  {
+    return 1;
+  }
+
   stmSMPExecutor executor(this);
-  executor.SetProgressRange(0.2, 0.9);
+  executor.SetProgressRange(0.25, 0.9);
   std::string error;
   const bool built = geometry.Dimension == 3
-    ? BuildTree<3>(
-        materials, voxelDims, geometry, materialLabels, this->MaxCellSize, executor, output, error)
+    ? BuildTree<3>(materials, voxelDims, geometry, materialLabels, request, executor, output, error)
     : BuildTree<2>(
-        materials, voxelDims, geometry, materialLabels, this->MaxCellSize, executor, output, error);
+        materials, voxelDims, geometry, materialLabels, request, executor, output, error);
   if (!built)
   {
     if (!this->GetAbortExecute())

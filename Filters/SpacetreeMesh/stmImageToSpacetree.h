@@ -6,10 +6,18 @@
  * stmImageToSpacetree is the first stage of the SpacetreeMesh pipeline. It reads an integer label
  * array of a 2D or 3D vtkImageData (point or cell scalars; a point-data image has one voxel per
  * point, centred on it) and builds the spacetree of the paper's section 2.1: a root grid of
- * power-of-two cells no larger than MaxCellSize voxels that covers the image (padded with
- * background), refined with the 2^d pattern while a cell holds more than one material. A
- * material is a label of the body of interest, or the background for every other label and
- * the padding. Every material interface is therefore resolved at voxel size.
+ * cells that covers the image (padded with background), refined with a Cartesian refinement
+ * pattern (2x2x2, 3x3x3, 2x2x1, one per level, or chosen automatically so that cells are as
+ * cubic as possible in physical units) while a cell holds more than one material. A material
+ * is a label of the body of interest, or the background for every other label and the
+ * padding. Every material interface is therefore resolved at voxel size.
+ *
+ * Size criteria refine further, and compose (the finest wins): a largest cell size per label
+ * (in voxels), a largest size inside a region given by an implicit function (in physical units,
+ * possibly below the voxel size), a sizing field (a point or cell array of the image with the
+ * label array's association, in physical units), and grading (a leaf at most Grading times
+ * larger than the finest leaf within its own size). Membership of a voxel in the region is
+ * decided at the voxel centre.
  *
  * The output is a vtkUnstructuredGrid with one hexahedron (quad in 2D) per leaf and the cell
  * arrays "Level" (0 = root), "Material" (the label, or BackgroundLabel outside the body) and
@@ -30,7 +38,11 @@
 #include "SpacetreeMeshFiltersModule.h" // for export macro
 #include "vtkUnstructuredGridAlgorithm.h"
 
+#include <map>    // for the per-label sizes
+#include <string> // for the pattern
 #include <vector> // for the body labels
+
+class vtkImplicitFunction;
 
 class SPACETREEMESHFILTERS_EXPORT stmImageToSpacetree : public vtkUnstructuredGridAlgorithm
 {
@@ -68,12 +80,98 @@ public:
 
   ///@{
   /**
-   * Largest leaf edge, in voxels; the root cells are the largest power of two not above it
-   * (and no larger than needed to cover the image). Default 16, range 1 to 2^20.
+   * Largest root cell edge, in voxels, on every axis, when RootCellSize is automatic: the root
+   * cells are the largest the refinement pattern reaches without exceeding it (and no larger
+   * than needed to cover the image). Default 16, range 1 to 2^20.
    */
   vtkSetClampMacro(MaxCellSize, int, 1, 1 << 20);
   vtkGetMacro(MaxCellSize, int);
   ///@}
+
+  ///@{
+  /**
+   * The refinement pattern: "auto" (the default: at every level, split the axes that leave
+   * the cells closest to cubes in physical units; 2x2x2 for cubic voxels, 2x2x1 then 2x2x2 for
+   * 0.5 x 0.5 x 1 mm voxels), or split counts per image axis joined by 'x' ("3x3x3"), or a
+   * comma-separated list of them, finest level first, the last repeating for all coarser
+   * levels ("2x2x1,2x2x2"). Counts are 1 to 8; an entry of only ones is an error. A 2D image
+   * takes two counts, or three of which the flat axis is ignored.
+   */
+  vtkSetStdStringFromCharMacro(RefinementPattern);
+  vtkGetCharFromStdStringMacro(RefinementPattern);
+  ///@}
+
+  ///@{
+  /**
+   * Root cell edges in voxels per image axis; (0, 0, 0), the default, chooses them from
+   * MaxCellSize and the pattern. Otherwise every spanned axis needs a positive size, no larger
+   * than the image, that the pattern reaches exactly. The image need not be divisible by it.
+   */
+  vtkSetVector3Macro(RootCellSize, int);
+  vtkGetVector3Macro(RootCellSize, int);
+  ///@}
+
+  ///@{
+  /**
+   * Largest leaf edge, in voxels (>= 1), for the leaves of a label of the body of interest.
+   * Labels without an entry are limited by the root cell size only.
+   */
+  void SetLabelMaxCellSize(double label, double size);
+  void RemoveAllLabelMaxCellSizes();
+  int GetNumberOfLabelMaxCellSizes() const;
+  ///@}
+
+  ///@{
+  /**
+   * A region (an implicit function: box, sphere, plane, cylinder, ...) inside which leaves
+   * have no edge longer than RegionMaxCellSize, in physical units, below the voxel size if
+   * asked. Inside means a value <= 0 at the voxel centre, or, with a positive RegionBandWidth,
+   * an absolute value <= RegionBandWidth / 2 (a slab around a plane, a shell around a sphere).
+   * Default: no region.
+   */
+  virtual void SetRefinementRegion(vtkImplicitFunction* region);
+  vtkGetObjectMacro(RefinementRegion, vtkImplicitFunction);
+  ///@}
+
+  ///@{
+  /**
+   * Largest leaf edge inside the refinement region, in physical units; 0 (the default)
+   * disables the region criterion. Negative values are an error.
+   */
+  vtkSetMacro(RegionMaxCellSize, double);
+  vtkGetMacro(RegionMaxCellSize, double);
+  ///@}
+
+  ///@{
+  /**
+   * Width of the band around the region's zero set that counts as the region; 0 (the
+   * default) means the inside (value <= 0).
+   */
+  vtkSetClampMacro(RegionBandWidth, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(RegionBandWidth, double);
+  ///@}
+
+  ///@{
+  /**
+   * Grading: a leaf may be at most Grading times larger (longest physical edge) than the
+   * finest leaf within its own size. 0, the default, disables it; otherwise at least 1.5.
+   */
+  vtkSetMacro(Grading, double);
+  vtkGetMacro(Grading, double);
+  ///@}
+
+  ///@{
+  /**
+   * Use input array 1 (SetInputArrayToProcess(1, ...)) as a sizing field: the largest leaf
+   * edge at each voxel, in physical units, positive. It must have the label array's
+   * association. Default off.
+   */
+  vtkSetMacro(UseSizingArray, bool);
+  vtkGetMacro(UseSizingArray, bool);
+  vtkBooleanMacro(UseSizingArray, bool);
+  ///@}
+
+  vtkMTimeType GetMTime() override;
 
 protected:
   stmImageToSpacetree();
@@ -86,6 +184,14 @@ protected:
   std::vector<int> BodyLabels;
   int BackgroundLabel = 0;
   int MaxCellSize = 16;
+  std::string RefinementPattern = "auto";
+  int RootCellSize[3] = { 0, 0, 0 };
+  std::map<int, double> LabelMaxCellSizes;
+  vtkImplicitFunction* RefinementRegion = nullptr;
+  double RegionMaxCellSize = 0;
+  double RegionBandWidth = 0;
+  double Grading = 0;
+  bool UseSizingArray = false;
 
 private:
   stmImageToSpacetree(const stmImageToSpacetree&) = delete;

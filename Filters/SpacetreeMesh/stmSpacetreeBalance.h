@@ -11,6 +11,10 @@
  * better-shaped elements after tessellation (BalanceLevel 1 gives the best); a higher one,
  * fewer leaves.
  *
+ * The balance level may vary: per label (LabelBalanceLevels) and inside a region (an implicit
+ * function, value <= 0 at the leaf centre), which overrides the label's. Two adjacent leaves
+ * must satisfy the smaller of their two levels.
+ *
  * @sa stmImageToSpacetree stmSpacetreeTessellate
  */
 
@@ -19,6 +23,10 @@
 
 #include "SpacetreeMeshFiltersModule.h" // for export macro
 #include "vtkUnstructuredGridAlgorithm.h"
+
+#include <map> // for the per-label levels
+
+class vtkImplicitFunction;
 
 class SPACETREEMESHFILTERS_EXPORT stmSpacetreeBalance : public vtkUnstructuredGridAlgorithm
 {
@@ -45,6 +53,35 @@ public:
   vtkBooleanMacro(FaceBalanceOnly, bool);
   ///@}
 
+  ///@{
+  /**
+   * Balance level (1 to 20) of the leaves of a body label, instead of BalanceLevel. Every
+   * listed label must be a body label of the spacetree.
+   */
+  void SetLabelBalanceLevel(double label, double level);
+  void RemoveAllLabelBalanceLevels();
+  int GetNumberOfLabelBalanceLevels() const;
+  ///@}
+
+  ///@{
+  /**
+   * A region (implicit function; inside where its value at a leaf centre is <= 0) with its own
+   * balance level, RegionBalanceLevel. Default: none.
+   */
+  virtual void SetBalanceRegion(vtkImplicitFunction* region);
+  vtkGetObjectMacro(BalanceRegion, vtkImplicitFunction);
+  ///@}
+
+  ///@{
+  /**
+   * Balance level inside BalanceRegion; 0 (the default) disables the region, otherwise 1 to 20.
+   */
+  vtkSetClampMacro(RegionBalanceLevel, int, 0, 20);
+  vtkGetMacro(RegionBalanceLevel, int);
+  ///@}
+
+  vtkMTimeType GetMTime() override;
+
 protected:
   stmSpacetreeBalance();
   ~stmSpacetreeBalance() override;
@@ -54,6 +91,9 @@ protected:
 
   int BalanceLevel = 1;
   bool FaceBalanceOnly = false;
+  std::map<int, int> LabelBalanceLevels;
+  vtkImplicitFunction* BalanceRegion = nullptr;
+  int RegionBalanceLevel = 0;
 
 private:
   stmSpacetreeBalance(const stmSpacetreeBalance&) = delete;

@@ -40,6 +40,8 @@ constexpr const char* BalanceLevelName = "SpacetreeBalanceLevel";
 constexpr const char* FaceBalanceOnlyName = "SpacetreeFaceBalanceOnly";
 constexpr const char* OriginName = "SpacetreeLatticeOrigin";
 constexpr const char* AxisVectorsName = "SpacetreeLatticeAxes";
+constexpr const char* CellSizesName = "SpacetreeCellSizes";
+constexpr const char* VoxelSubdivisionName = "SpacetreeVoxelSubdivision";
 
 void AddIntArray(vtkFieldData* fd, const char* name, const std::vector<int>& values)
 {
@@ -223,7 +225,7 @@ void RemoveSpacetreeFieldData(vtkFieldData* fieldData)
 {
   for (const char* name : { DimensionName, ImageAxesName, RootGridName, MaxLevelName,
          ImageDimensionsName, BackgroundLabelName, BodyLabelsName, BalanceLevelName,
-         FaceBalanceOnlyName, OriginName, AxisVectorsName })
+         FaceBalanceOnlyName, OriginName, AxisVectorsName, CellSizesName, VoxelSubdivisionName })
   {
     fieldData->RemoveArray(name);
   }
@@ -262,13 +264,13 @@ bool ReadLeaves(vtkDataArray* levels, vtkDataArray* materials, vtkDataArray* ind
         stm::LatticeIndex<Dim> anchor{};
         if (good)
         {
-          const std::int64_t size = tree.GetCellSize(static_cast<int>(level));
+          const stm::LatticeIndex<Dim>& size = tree.GetCellSize(static_cast<int>(level));
           for (int axis = 0; axis < Dim; ++axis)
           {
             const double index = typedIndices ? typedIndices->GetTypedComponent(leaf, axis)
                                               : indices->GetComponent(leaf, axis);
             good = good && index >= 0 && index < 2147483648.0 && index == std::floor(index);
-            anchor[axis] = good ? static_cast<std::int64_t>(index) * size : 0;
+            anchor[axis] = good ? static_cast<std::int64_t>(index) * size[axis] : 0;
           }
         }
         if (!good)
@@ -321,10 +323,36 @@ bool ReadSpacetree(vtkUnstructuredGrid* input, stm::Spacetree<Dim>& tree, std::s
     return false;
   }
   tree.MaxLevel = static_cast<int>(ints[0]);
-  if (tree.MaxLevel < 0 || tree.MaxLevel > 20)
+  if (tree.MaxLevel < 0 || tree.MaxLevel > stm::MaximumSupportedLevel)
   {
-    error = "the spacetree's MaxLevel must be between 0 and 20";
+    error = "the spacetree's MaxLevel must be between 0 and " +
+      std::to_string(stm::MaximumSupportedLevel);
     return false;
+  }
+  // The level table; a spacetree without one (written before refinement patterns existed) has
+  // 2^d refinement at voxel resolution.
+  tree.SetUniformRefinement(tree.MaxLevel);
+  if (fd->GetArray(CellSizesName) || fd->GetArray(VoxelSubdivisionName))
+  {
+    if (!GetInts(fd, CellSizesName, (tree.MaxLevel + 1) * Dim, ints, error))
+    {
+      return false;
+    }
+    for (int level = 0; level <= tree.MaxLevel; ++level)
+    {
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        tree.CellSizes[level][axis] = ints[level * Dim + axis];
+      }
+    }
+    if (!GetInts(fd, VoxelSubdivisionName, Dim, ints, error))
+    {
+      return false;
+    }
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      tree.VoxelSubdivision[axis] = ints[axis];
+    }
   }
   if (!GetInts(fd, BalanceLevelName, 1, ints, error))
   {
@@ -412,10 +440,10 @@ void WriteSpacetree(const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry&
   auto cornerOf = [&tree](vtkIdType leaf, int c)
   {
     stm::LatticeIndex<Dim> corner = tree.LeafAnchors[leaf];
-    const std::int64_t size = tree.GetCellSize(tree.LeafLevels[leaf]);
+    const stm::LatticeIndex<Dim>& size = tree.GetCellSize(tree.LeafLevels[leaf]);
     for (int axis = 0; axis < Dim; ++axis)
     {
-      corner[axis] += ((c >> axis) & 1) * size;
+      corner[axis] += ((c >> axis) & 1) * size[axis];
     }
     return corner;
   };
@@ -496,7 +524,7 @@ void WriteSpacetree(const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry&
         for (int axis = 0; axis < Dim; ++axis)
         {
           indexValues[leaf * Dim + axis] =
-            static_cast<int>(tree.LeafAnchors[leaf][axis] / tree.GetCellSize(level));
+            static_cast<int>(tree.LeafAnchors[leaf][axis] / tree.GetCellSize(level)[axis]);
         }
       }
     });
@@ -525,6 +553,14 @@ void WriteSpacetree(const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry&
   AddIntArray(fd, ImageAxesName, axes);
   AddIntArray(fd, RootGridName, root);
   AddIntArray(fd, MaxLevelName, { tree.MaxLevel });
+  std::vector<int> sizes, subdivision;
+  for (const auto& size : tree.CellSizes)
+  {
+    sizes.insert(sizes.end(), size.begin(), size.end());
+  }
+  subdivision.assign(tree.VoxelSubdivision.begin(), tree.VoxelSubdivision.end());
+  AddIntArray(fd, CellSizesName, sizes);
+  AddIntArray(fd, VoxelSubdivisionName, subdivision);
   AddIntArray(fd, ImageDimensionsName, image);
   AddIntArray(fd, BackgroundLabelName, { static_cast<int>(tree.MaterialLabels[0]) });
   AddIntArray(fd, BodyLabelsName, body);

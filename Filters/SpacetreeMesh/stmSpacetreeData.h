@@ -30,7 +30,8 @@ struct stmSpacetreeGeometry
   int ImageAxes[3] = { 0, 1, 2 };
   /// Physical position of lattice point 0 (the outer corner of the first voxel).
   double Origin[3] = { 0, 0, 0 };
-  /// Physical vector of one lattice unit (one voxel edge) along each image axis.
+  /// Physical vector of one lattice unit along each image axis (a voxel edge, or a fraction of
+  /// it where cells are refined below the voxel).
   double AxisVectors[3][3] = { { 1, 0, 0 }, { 0, 1, 0 }, { 0, 0, 1 } };
 
   /// x = Origin + sum_i lattice[i] * AxisVectors[ImageAxes[i]], for Dimension coordinates.

@@ -30,7 +30,7 @@ namespace
 {
 /// Fills the connectivity straight into a vtkCellArray of the given storage type.
 template <class StorageArray, class IdType, int Dim>
-vtkSmartPointer<vtkCellArray> WriteCells(const stm::SpacetreeTessellator<Dim>& tessellator,
+vtkSmartPointer<vtkCellArray> WriteCells(stm::SpacetreeTessellator<Dim>& tessellator,
   std::vector<stm::MaterialIndex>& materialIndices, bool mirrored, stmSMPExecutor& executor)
 {
   const std::int64_t cells = tessellator.GetNumberOfSimplices();

@@ -47,8 +47,8 @@ struct SpacetreeBalanceOptions
 
   /// The local balance level of a leaf.
   template <int Dim>
-  int LocalLevel(const LatticeIndex<Dim>& anchor, const LatticeIndex<Dim>& size,
-    MaterialIndex material) const
+  int LocalLevel(
+    const LatticeIndex<Dim>& anchor, const LatticeIndex<Dim>& size, MaterialIndex material) const
   {
     if (this->RegionBalanceLevel)
     {
@@ -206,8 +206,8 @@ class SpacetreeBalancer
     {
       return neighborLevel < level - localLevel;
     }
-    const int neighborLocal = options.LocalLevel<Dim>(map.AnchorOf(sample, neighborLevel),
-      map.CellSize(neighborLevel), map.MaterialAt(sample));
+    const int neighborLocal = options.LocalLevel<Dim>(
+      map.AnchorOf(sample, neighborLevel), map.CellSize(neighborLevel), map.MaterialAt(sample));
     return neighborLevel < level - std::min(localLevel, neighborLocal);
   }
 
@@ -264,7 +264,8 @@ public:
           const LatticeIndex<Dim> neighborAnchor = map.AnchorOf(request.Sample, neighborLevel);
           map.Split(neighborAnchor, neighborLevel);
           tree.ForEachChild(neighborAnchor, neighborLevel,
-            [&](const LatticeIndex<Dim>& child) { leavesByLevel[neighborLevel + 1].push_back(child); });
+            [&](const LatticeIndex<Dim>& child)
+            { leavesByLevel[neighborLevel + 1].push_back(child); });
         }
       }
       leaves.clear();
@@ -374,8 +375,8 @@ std::int64_t CountBalanceViolations(
       [&](const LatticeIndex<Dim>& cell)
       {
         const int neighborLevel = map.LevelAt(cell);
-        const int neighborLocal = options.LocalLevel<Dim>(map.AnchorOf(cell, neighborLevel),
-          map.CellSize(neighborLevel), map.MaterialAt(cell));
+        const int neighborLocal = options.LocalLevel<Dim>(
+          map.AnchorOf(cell, neighborLevel), map.CellSize(neighborLevel), map.MaterialAt(cell));
         violations += level - neighborLevel > std::min(local, neighborLocal);
       });
   }

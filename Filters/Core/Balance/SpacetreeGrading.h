@@ -70,7 +70,8 @@ public:
       executor.ReportProgress(0.1 + 0.8 * (tree.MaxLevel - level) / tree.MaxLevel);
       // The coarsest level whose leaves are still small enough next to a leaf of this level.
       int coarsestAllowed = level;
-      while (coarsestAllowed > 0 && edges[coarsestAllowed - 1] <= grading * edges[level] * (1 + 1e-9))
+      while (
+        coarsestAllowed > 0 && edges[coarsestAllowed - 1] <= grading * edges[level] * (1 + 1e-9))
       {
         --coarsestAllowed;
       }
@@ -185,8 +186,8 @@ bool IsGraded(
       bool near = true;
       for (int axis = 0; axis < Dim && near; ++axis)
       {
-        const std::int64_t gapLow = tree.LeafAnchors[small][axis] -
-          (tree.LeafAnchors[big][axis] + bigSize[axis]);
+        const std::int64_t gapLow =
+          tree.LeafAnchors[small][axis] - (tree.LeafAnchors[big][axis] + bigSize[axis]);
         const std::int64_t gapHigh = tree.LeafAnchors[big][axis] -
           (tree.LeafAnchors[small][axis] + tree.GetCellSize(smallLevel)[axis]);
         near = std::max(gapLow, gapHigh) < bigSize[axis];

@@ -377,8 +377,7 @@ Status PlanRefinement(const LatticeIndex<Dim>& imageDimensions,
         subdivision[axis] *= splits[axis];
         if (subdivision[axis] > 256)
         {
-          return Status::OutOfRange(
-            "the finest cell size asks for cells below 1/256 of a voxel");
+          return Status::OutOfRange("the finest cell size asks for cells below 1/256 of a voxel");
         }
       }
       downward.push_back(splits);
@@ -419,6 +418,61 @@ Status PlanRefinement(const LatticeIndex<Dim>& imageDimensions,
     }
   }
   return Status::Ok();
+}
+
+/// Parses a refinement pattern: "auto" (an empty list), or comma-separated entries of split
+/// counts joined by 'x', finest level first, e.g. "2x2x1,2x2x2". Every entry must have `counts`
+/// numbers. False with a message on a syntax error; the counts themselves are checked by
+/// ValidatePattern.
+inline bool ParseRefinementPattern(
+  const std::string& text, int counts, std::vector<std::vector<int>>& pattern, std::string& error)
+{
+  pattern.clear();
+  std::string trimmed;
+  for (char c : text)
+  {
+    if (c != ' ' && c != '\t')
+    {
+      trimmed += static_cast<char>(c == 'X' ? 'x' : c);
+    }
+  }
+  if (trimmed.empty() || trimmed == "auto")
+  {
+    return true;
+  }
+  std::size_t start = 0;
+  while (start <= trimmed.size())
+  {
+    const std::size_t end = std::min(trimmed.find(',', start), trimmed.size());
+    const std::string entry = trimmed.substr(start, end - start);
+    std::vector<int> values;
+    std::size_t position = 0;
+    while (position <= entry.size())
+    {
+      const std::size_t next = std::min(entry.find('x', position), entry.size());
+      const std::string number = entry.substr(position, next - position);
+      const bool digits = !number.empty() &&
+        number.find_first_not_of("0123456789", number[0] == '-' ? 1 : 0) == std::string::npos &&
+        number != "-" && number.size() < 9;
+      if (!digits)
+      {
+        error = "refinement pattern \"" + text + "\": \"" + entry +
+          "\" is not a list of split counts such as 2x2x1";
+        return false;
+      }
+      values.push_back(std::stoi(number));
+      position = next + 1;
+    }
+    if (static_cast<int>(values.size()) != counts)
+    {
+      error = "refinement pattern \"" + text + "\": entry \"" + entry + "\" has " +
+        std::to_string(values.size()) + " split counts; the image needs " + std::to_string(counts);
+      return false;
+    }
+    pattern.push_back(values);
+    start = end + 1;
+  }
+  return true;
 }
 
 } // namespace stm

@@ -183,7 +183,8 @@ public:
   /// Appends the leaves of another tree with the same level table.
   void AppendLeaves(const Spacetree& other)
   {
-    this->LeafLevels.insert(this->LeafLevels.end(), other.LeafLevels.begin(), other.LeafLevels.end());
+    this->LeafLevels.insert(
+      this->LeafLevels.end(), other.LeafLevels.begin(), other.LeafLevels.end());
     this->LeafAnchors.insert(
       this->LeafAnchors.end(), other.LeafAnchors.begin(), other.LeafAnchors.end());
     this->LeafMaterials.insert(

@@ -134,7 +134,8 @@ public:
       const std::int64_t subdivision = tree.VoxelSubdivision[axis];
       const std::int64_t end = anchor[axis] + tree.GetCellSize(level)[axis];
       first[axis] = anchor[axis] / subdivision;
-      last[axis] = std::min<std::int64_t>((end + subdivision - 1) / subdivision, image.Dimensions[axis]);
+      last[axis] =
+        std::min<std::int64_t>((end + subdivision - 1) / subdivision, image.Dimensions[axis]);
       clipped = clipped || last[axis] * subdivision < end;
       if (last[axis] <= first[axis])
       {

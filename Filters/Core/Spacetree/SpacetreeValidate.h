@@ -22,8 +22,8 @@ Status ValidateSpacetree(const Spacetree<Dim>& tree)
 {
   if (tree.MaxLevel < 0 || tree.MaxLevel > MaximumSupportedLevel)
   {
-    return Status::Invalid("the spacetree's MaxLevel must be between 0 and " +
-      std::to_string(MaximumSupportedLevel));
+    return Status::Invalid(
+      "the spacetree's MaxLevel must be between 0 and " + std::to_string(MaximumSupportedLevel));
   }
   if (tree.LeafAnchors.size() != tree.LeafLevels.size() ||
     tree.LeafMaterials.size() != tree.LeafLevels.size())

@@ -370,7 +370,8 @@ private:
     for (int parity = 0; parity < 2; ++parity)
     {
       std::vector<Point> simplices;
-      this->AppendTemplate(Point{}, Spacetree<Dim>::UnitSize(), parity, (1u << Dim) - 1u, simplices);
+      this->AppendTemplate(
+        Point{}, Spacetree<Dim>::UnitSize(), parity, (1u << Dim) - 1u, simplices);
       Orient(simplices);
       auto& table = this->RegularCellTables[parity];
       table.clear();

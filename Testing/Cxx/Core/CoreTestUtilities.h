@@ -726,8 +726,8 @@ void ExpectMeshMatchesVoxelModel(
   std::int64_t faces = 0;
   for (int axis = 0; axis < D; ++axis)
   {
-    faces += CountVoxelBoundaryFaces<D>(image, axis) * latticeCellsPerVoxel /
-      tree.VoxelSubdivision[axis];
+    faces +=
+      CountVoxelBoundaryFaces<D>(image, axis) * latticeCellsPerVoxel / tree.VoxelSubdivision[axis];
   }
   EXPECT_EQ(exact.SkewBoundaryFacets, 0) << "the boundary of a voxel body is axis-aligned";
   EXPECT_EQ(exact.ScaledBoundaryMeasure, faces * ScaledVoxelFace<D>()) << "exact boundary";

@@ -172,7 +172,8 @@ TYPED_TEST(SpacetreeBuildTest, LeavesPartitionTheRootGridAndMatchTheImageVoxelBy
         volume += LeafVolume<D>(tree, leaf);
         for (int axis = 0; axis < D; ++axis)
         {
-          misaligned += tree.LeafAnchors[leaf][axis] % tree.GetCellSize(tree.LeafLevels[leaf])[axis] != 0;
+          misaligned +=
+            tree.LeafAnchors[leaf][axis] % tree.GetCellSize(tree.LeafLevels[leaf])[axis] != 0;
         }
       }
       EXPECT_EQ(badLevels, 0);

@@ -58,12 +58,15 @@ int MaxNeighbourLevelDifference(vtkUnstructuredGrid* tree, bool facetsOnly)
 {
   vtkFieldData* fd = tree->GetFieldData();
   const int dim = static_cast<int>(fd->GetArray("SpacetreeDimension")->GetComponent(0, 0));
-  const int maxLevel = static_cast<int>(fd->GetArray("SpacetreeMaxLevel")->GetComponent(0, 0));
+  // Cell edges per level and axis, in lattice units, root first.
+  vtkDataArray* cellSizes = fd->GetArray("SpacetreeCellSizes");
+  auto edge = [&](int l, int a)
+  { return static_cast<int>(cellSizes->GetComponent(l * dim + a, 0)); };
   int dims[3] = { 1, 1, 1 };
   for (int a = 0; a < dim; ++a)
   {
-    dims[a] = static_cast<int>(fd->GetArray("SpacetreeRootGridDimensions")->GetComponent(a, 0))
-      << maxLevel;
+    dims[a] = static_cast<int>(fd->GetArray("SpacetreeRootGridDimensions")->GetComponent(a, 0)) *
+      edge(0, a);
   }
   std::vector<int> level(static_cast<std::size_t>(dims[0]) * dims[1] * dims[2], -1);
   vtkDataArray* levels = tree->GetCellData()->GetArray("Level");
@@ -71,12 +74,11 @@ int MaxNeighbourLevelDifference(vtkUnstructuredGrid* tree, bool facetsOnly)
   for (vtkIdType c = 0; c < tree->GetNumberOfCells(); ++c)
   {
     const int l = static_cast<int>(levels->GetComponent(c, 0));
-    const int size = 1 << (maxLevel - l);
     int lo[3] = { 0, 0, 0 }, hi[3] = { 1, 1, 1 };
     for (int a = 0; a < dim; ++a)
     {
-      lo[a] = static_cast<int>(indices->GetComponent(c, a)) * size;
-      hi[a] = lo[a] + size;
+      lo[a] = static_cast<int>(indices->GetComponent(c, a)) * edge(l, a);
+      hi[a] = lo[a] + edge(l, a);
     }
     for (int k = lo[2]; k < hi[2]; ++k)
       for (int j = lo[1]; j < hi[1]; ++j)
