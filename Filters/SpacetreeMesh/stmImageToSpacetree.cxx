@@ -460,7 +460,7 @@ void stmImageToSpacetree::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "RegionMaxCellSize: " << this->RegionMaxCellSize << "\n";
   os << indent << "RegionBandWidth: " << this->RegionBandWidth << "\n";
   os << indent << "Grading: " << this->Grading << "\n";
-  os << indent << "UseSizingArray: " << this->UseSizingArray << "\n";
+  os << indent << "UseSizingArray: " << (this->UseSizingArray ? "On" : "Off") << "\n";
 }
 
 int stmImageToSpacetree::FillInputPortInformation(int, vtkInformation* info)

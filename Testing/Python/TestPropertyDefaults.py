@@ -6,6 +6,9 @@ For every proxy of /work/main/Plugin/*.xml (STM_XML_DIR):
 - every IntVectorProperty with command="SetX" has an XML default equal to GetX() of a fresh
   instance of the wrapped class (BodyLabels: empty XML default and GetNumberOfBodyLabels() == 0),
   its range domain equals the C++ clamp range, its enumeration the C++ enum;
+- every DoubleVectorProperty and StringVectorProperty with command="SetX" likewise; the
+  repeated (label, value) pair properties default to empty and store what their command sets;
+  the implicit-function (region) properties default to no function;
 - PrintSelf (str(obj)) of each class mentions every property;
 - the proxies made by ParaView from these XML files hold the same defaults and push them
   unchanged into their VTK objects.
@@ -31,7 +34,14 @@ EXPECTED_PROXIES = {
     ("sources", "stmNIFTIReader"),
 }
 # Properties whose command is not a plain SetX/GetX pair, and what they are checked by instead.
-SPECIAL = {"LabelArray", "Input", "FileName", "BodyLabels"}
+SPECIAL = {"LabelArray", "Input", "FileName", "BodyLabels", "SizingArray"}
+# Repeated (label, value) pairs: property name -> (count getter, PrintSelf text after setting 5, 3).
+PAIR_PROPERTIES = {
+    "LabelMaxCellSizes": ("GetNumberOfLabelMaxCellSizes", "LabelMaxCellSizes: 5:3"),
+    "LabelBalanceLevels": ("GetNumberOfLabelBalanceLevels", "LabelBalanceLevels: 5:3"),
+}
+# Implicit-function properties: property name -> getter.
+REGION_PROPERTIES = {"RefinementRegion": "GetRefinementRegion", "BalanceRegion": "GetBalanceRegion"}
 
 problems = []
 
@@ -147,6 +157,59 @@ def check_int_property(where, prop, obj, printed):
             setter(defaults[0])
 
 
+def check_pair_property(where, prop, obj):
+    name = prop.get("name")
+    count_getter, printed_pair = PAIR_PROPERTIES[name]
+    if prop.get("default_values") or prop.get("number_of_elements") != "0":
+        problem("%s: must default to empty" % where)
+    if prop.get("number_of_elements_per_command") != "2" or prop.get("repeat_command") != "1":
+        problem("%s: must be repeated (label, value) pairs" % where)
+    if getattr(obj, count_getter)() != 0:
+        problem("%s: C++ %s() is not 0 by default" % (where, count_getter))
+    getattr(obj, prop.get("command"))(5, 3)
+    if getattr(obj, count_getter)() != 1 or printed_pair not in str(obj):
+        problem("%s: %s(5, 3) is not stored or not printed as %r" % (where, prop.get("command"), printed_pair))
+    getattr(obj, prop.get("clean_command"))()
+    if getattr(obj, count_getter)() != 0:
+        problem("%s: %s() leaves entries" % (where, prop.get("clean_command")))
+
+
+def check_region_property(where, prop, obj):
+    name = prop.get("name")
+    if getattr(obj, REGION_PROPERTIES[name])() is not None:
+        problem("%s: C++ default is not 'no region'" % where)
+    if "%s: (none)" % name not in str(obj):
+        problem("%s: PrintSelf does not show '%s: (none)'" % (where, name))
+    domain = prop.find("ProxyListDomain")
+    names = sorted(p.get("name") for p in domain.findall("Proxy")) if domain is not None else []
+    if names != ["Box", "Cylinder", "Plane", "Sphere"]:
+        problem("%s: the region widgets are %r" % (where, names))
+
+
+def check_value_property(where, prop, obj, printed, parse):
+    """A DoubleVectorProperty or StringVectorProperty with a SetX/GetX pair."""
+    name = prop.get("name")
+    command = prop.get("command") or ""
+    getter = getattr(obj, "Get" + command[3:], None)
+    if not command.startswith("Set") or getter is None:
+        problem("%s: no Set/Get pair for command %r" % (where, command))
+        return
+    defaults = [parse(v) for v in (prop.get("default_values") or "").split()]
+    actual = getter()
+    actual = list(actual) if isinstance(actual, (tuple, list)) else [actual]
+    if actual != defaults:
+        problem("%s: XML default %r, C++ %r" % (where, defaults, actual))
+    if name not in printed:
+        problem("%s: PrintSelf of %s does not mention %s" % (where, obj.GetClassName(), name))
+
+
+def check_sizing_array(where, prop, obj):
+    if prop.get("command") != "SetInputArrayToProcess" or prop.get("default_values") != "1":
+        problem("%s: must set input array 1" % where)
+    if obj.GetUseSizingArray():
+        problem("%s: the sizing array must be off by default" % where)
+
+
 def check_label_array(where, prop, obj):
     if prop.get("command") != "SetInputArrayToProcess":
         problem("%s: command %r" % (where, prop.get("command")))
@@ -201,8 +264,18 @@ for path in xml_files:
                 command = prop.get("command")
                 if command and not hasattr(obj, command):
                     problem("%s: %s has no method %s" % (pwhere, obj.GetClassName(), command))
-                if prop.tag == "IntVectorProperty":
+                if name in PAIR_PROPERTIES:
+                    check_pair_property(pwhere, prop, obj)
+                elif name in REGION_PROPERTIES:
+                    check_region_property(pwhere, prop, obj)
+                elif name == "SizingArray":
+                    check_sizing_array(pwhere, prop, obj)
+                elif prop.tag == "IntVectorProperty":
                     check_int_property(pwhere, prop, obj, printed)
+                elif prop.tag == "DoubleVectorProperty":
+                    check_value_property(pwhere, prop, obj, printed, float)
+                elif prop.tag == "StringVectorProperty" and name not in SPECIAL:
+                    check_value_property(pwhere, prop, obj, printed, str)
                 elif name == "LabelArray":
                     check_label_array(pwhere, prop, obj)
                 elif name not in SPECIAL:
@@ -233,18 +306,21 @@ for (group_name, proxy_name) in sorted(found):
     if vtk_object.GetClassName() != xml_proxy.get("class"):
         problem("%s: ParaView made a %s" % (proxy_name, vtk_object.GetClassName()))
         continue
-    for prop in xml_proxy.findall("IntVectorProperty"):
+    for prop in xml_proxy.findall("IntVectorProperty") + xml_proxy.findall("DoubleVectorProperty"):
         name = prop.get("name")
-        defaults = [int(v) for v in (prop.get("default_values") or "").split()]
+        parse = int if prop.tag == "IntVectorProperty" else float
+        defaults = [parse(v) for v in (prop.get("default_values") or "").split()]
         sm_property = sm_proxy.GetProperty(name)
         value = [sm_property.GetElement(i) for i in range(sm_property.GetNumberOfElements())]
         if value != defaults:
             problem("%s.%s: proxy value %r, XML default %r" % (proxy_name, name, value, defaults))
         if name == "BodyLabels":
             pushed = [vtk_object.GetBodyLabel(i) for i in range(vtk_object.GetNumberOfBodyLabels())]
+        elif name in PAIR_PROPERTIES:
+            pushed = [] if getattr(vtk_object, PAIR_PROPERTIES[name][0])() == 0 else ["entries"]
         else:
             pushed = getattr(vtk_object, "Get" + prop.get("command")[3:])()
-            pushed = [as_int(pushed)]
+            pushed = [parse(v) for v in pushed] if isinstance(pushed, (tuple, list)) else [parse(pushed)]
         if pushed != defaults:
             problem("%s.%s: pushed to the VTK object as %r, XML default %r"
                     % (proxy_name, name, pushed, defaults))
@@ -258,6 +334,16 @@ for (group_name, proxy_name) in sorted(found):
         if got != ([4, 2], 8):
             problem("stmImageToSpacetree: BodyLabels [4, 2], MaxCellSize 8 reached the VTK object as %r"
                     % (got,))
+        proxy.RefinementPattern = "2x2x1,2x2x2"
+        proxy.LabelMaxCellSizes = [7, 2.5]
+        proxy.RegionMaxCellSize = 0.5
+        proxy.UpdateVTKObjects()
+        got = (vtk_object.GetRefinementPattern(), vtk_object.GetNumberOfLabelMaxCellSizes(),
+               vtk_object.GetRegionMaxCellSize(),
+               vtk_object.GetRefinementRegion().GetClassName() if vtk_object.GetRefinementRegion() else None)
+        if got != ("2x2x1,2x2x2", 1, 0.5, "vtkPVBox"):
+            problem("stmImageToSpacetree: pattern, label size, region size and the default Box region "
+                    "reached the VTK object as %r" % (got,))
         proxy.BodyLabels = []
         proxy.UpdateVTKObjects()
         if vtk_object.GetNumberOfBodyLabels() != 0:

@@ -40,8 +40,24 @@ TEST(FilterParameters, ImageToSpacetree)
   EXPECT_EQ(filter->GetBodyLabel(3), 9);
   filter->RemoveAllBodyLabels();
   EXPECT_EQ(filter->GetNumberOfBodyLabels(), 0);
+  EXPECT_EQ(std::string(filter->GetRefinementPattern()), "auto");
+  EXPECT_EQ(filter->GetRootCellSize()[0], 0);
+  EXPECT_EQ(filter->GetRootCellSize()[2], 0);
+  EXPECT_EQ(filter->GetNumberOfLabelMaxCellSizes(), 0);
+  EXPECT_EQ(filter->GetRefinementRegion(), nullptr);
+  EXPECT_EQ(filter->GetRegionMaxCellSize(), 0.0);
+  EXPECT_EQ(filter->GetRegionBandWidth(), 0.0);
+  EXPECT_EQ(filter->GetGrading(), 0.0);
+  EXPECT_FALSE(filter->GetUseSizingArray());
+  filter->SetRegionBandWidth(-1);
+  EXPECT_EQ(filter->GetRegionBandWidth(), 0.0);
+  filter->SetLabelMaxCellSize(3, 2);
+  filter->SetLabelMaxCellSize(3, 4);
+  EXPECT_EQ(filter->GetNumberOfLabelMaxCellSizes(), 1);
   const std::string printed = Printed(filter.Get());
-  for (const char* name : { "BodyLabels", "BackgroundLabel", "MaxCellSize" })
+  for (const char* name : { "BodyLabels", "BackgroundLabel", "MaxCellSize", "RefinementPattern",
+         "RootCellSize", "LabelMaxCellSizes: 3:4", "RefinementRegion", "RegionMaxCellSize",
+         "RegionBandWidth", "Grading", "UseSizingArray" })
   {
     EXPECT_NE(printed.find(name), std::string::npos) << name;
   }
@@ -56,8 +72,16 @@ TEST(FilterParameters, SpacetreeBalance)
   EXPECT_EQ(filter->GetBalanceLevel(), 1);
   filter->SetBalanceLevel(99);
   EXPECT_EQ(filter->GetBalanceLevel(), 20);
+  EXPECT_EQ(filter->GetNumberOfLabelBalanceLevels(), 0);
+  EXPECT_EQ(filter->GetBalanceRegion(), nullptr);
+  EXPECT_EQ(filter->GetRegionBalanceLevel(), 0);
+  filter->SetRegionBalanceLevel(21);
+  EXPECT_EQ(filter->GetRegionBalanceLevel(), 20);
+  filter->SetLabelBalanceLevel(4, 2);
+  EXPECT_EQ(filter->GetNumberOfLabelBalanceLevels(), 1);
   const std::string printed = Printed(filter.Get());
-  for (const char* name : { "BalanceLevel", "FaceBalanceOnly" })
+  for (const char* name : { "BalanceLevel", "FaceBalanceOnly", "LabelBalanceLevels: 4:2",
+         "BalanceRegion", "RegionBalanceLevel" })
   {
     EXPECT_NE(printed.find(name), std::string::npos) << name;
   }
