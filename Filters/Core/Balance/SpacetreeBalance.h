@@ -234,11 +234,7 @@ public:
       return status;
     }
 
-    std::vector<std::vector<LatticeIndex<Dim>>> leavesByLevel(tree.MaxLevel + 1);
-    for (std::int64_t leaf = 0; leaf < tree.GetNumberOfLeaves(); ++leaf)
-    {
-      leavesByLevel[tree.LeafLevels[leaf]].push_back(tree.LeafAnchors[leaf]);
-    }
+    std::vector<std::vector<LatticeIndex<Dim>>> leavesByLevel = tree.AnchorsByLevel();
     const auto directions = NeighborDirections<Dim>(options.FaceBalanceOnly);
     const int smallest = options.SmallestLevel();
 

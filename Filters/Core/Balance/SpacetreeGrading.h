@@ -55,11 +55,7 @@ public:
     {
       return status;
     }
-    std::vector<std::vector<LatticeIndex<Dim>>> leavesByLevel(tree.MaxLevel + 1);
-    for (std::int64_t leaf = 0; leaf < tree.GetNumberOfLeaves(); ++leaf)
-    {
-      leavesByLevel[tree.LeafLevels[leaf]].push_back(tree.LeafAnchors[leaf]);
-    }
+    std::vector<std::vector<LatticeIndex<Dim>>> leavesByLevel = tree.AnchorsByLevel();
     const LatticeIndex<Dim>& dims = map.GetDimensions();
     for (int level = tree.MaxLevel; level > 0; --level)
     {

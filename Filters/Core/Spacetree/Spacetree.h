@@ -180,6 +180,18 @@ public:
     this->LeafMaterials.reserve(count);
   }
 
+  /// The anchors of the leaves, grouped by level.
+  std::vector<std::vector<LatticeIndex<Dim>>> AnchorsByLevel() const
+  {
+    std::vector<std::vector<LatticeIndex<Dim>>> anchors(
+      static_cast<std::size_t>(this->MaxLevel) + 1);
+    for (std::size_t leaf = 0; leaf < this->LeafLevels.size(); ++leaf)
+    {
+      anchors[this->LeafLevels[leaf]].push_back(this->LeafAnchors[leaf]);
+    }
+    return anchors;
+  }
+
   /// Appends the leaves of another tree with the same level table.
   void AppendLeaves(const Spacetree& other)
   {

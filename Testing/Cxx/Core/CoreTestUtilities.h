@@ -257,16 +257,7 @@ stm::Status BuildTree(const LabelImage<D>& image, std::int64_t maxCellSize, int 
   stm::RefinementPlanOptions<D> plan;
   plan.MaxCellSize = maxCellSize;
   plan.Pattern = UniformPattern<D>(2);
-  stm::Status status = stm::SpacetreeBuilder<D>().Build(
-    image.View(), MaterialLabels(image.LargestMaterial() + 1), plan, tree, executor);
-  if (!status.IsOk() || balanceLevel <= 0)
-  {
-    return status;
-  }
-  stm::SpacetreeBalanceOptions balanceOptions;
-  balanceOptions.BalanceLevel = balanceLevel;
-  balanceOptions.FaceBalanceOnly = faceBalanceOnly;
-  return stm::SpacetreeBalancer<D>().Balance(tree, balanceOptions, executor);
+  return BuildTreeWithPlan<D>(image, plan, balanceLevel, faceBalanceOnly, executor, tree);
 }
 
 /// The output of the tessellator, in the form the VTK layer would copy it.
