@@ -136,6 +136,7 @@ class SpacetreeBalancer
     const std::vector<LatticeIndex<Dim>>* Leaves;
     const std::vector<LatticeIndex<Dim>>* Directions;
     int Level;
+    bool LocalLevels;
     /// (first leaf of the range, requests found), one entry per range.
     mutable std::vector<std::pair<std::int64_t, std::vector<Request>>> Found;
     mutable std::mutex FoundLock;
@@ -150,9 +151,11 @@ class SpacetreeBalancer
         {
           continue; // split since it was queued
         }
+        const int leafLevel = this->LocalLevels
+          ? this->Options->template LocalLevel<Dim>(
+              anchor, this->Map->CellSize(this->Level), this->Map->MaterialAt(anchor))
+          : this->Options->BalanceLevel;
         const LatticeIndex<Dim>& size = this->Map->CellSize(this->Level);
-        const int leafLevel =
-          this->Options->template LocalLevel<Dim>(anchor, size, this->Map->MaterialAt(anchor));
         for (const auto& direction : *this->Directions)
         {
           LatticeIndex<Dim> sample;
@@ -164,7 +167,9 @@ class SpacetreeBalancer
                                                : anchor[axis];
             inside = inside && sample[axis] >= 0 && sample[axis] < this->Map->GetDimensions()[axis];
           }
-          if (inside && IsTooCoarse(*this->Map, *this->Options, sample, this->Level, leafLevel))
+          if (inside &&
+            IsTooCoarse(
+              *this->Map, *this->Options, this->LocalLevels, sample, this->Level, leafLevel))
           {
             found.push_back(Request{ sample, this->Level, leafLevel });
           }
@@ -195,14 +200,14 @@ class SpacetreeBalancer
   /// Whether the leaf containing the sample cell is too coarse next to a leaf of the given level
   /// and local balance level.
   static bool IsTooCoarse(const LevelMap<Dim>& map, const SpacetreeBalanceOptions& options,
-    const LatticeIndex<Dim>& sample, int level, int localLevel)
+    bool localLevels, const LatticeIndex<Dim>& sample, int level, int localLevel)
   {
     const int neighborLevel = map.LevelAt(sample);
     if (neighborLevel >= level - 1)
     {
       return false; // the common case: every balance level is at least 1
     }
-    if (!options.HasLocalLevels())
+    if (!localLevels)
     {
       return neighborLevel < level - localLevel;
     }
@@ -237,6 +242,7 @@ public:
     std::vector<std::vector<LatticeIndex<Dim>>> leavesByLevel = tree.AnchorsByLevel();
     const auto directions = NeighborDirections<Dim>(options.FaceBalanceOnly);
     const int smallest = options.SmallestLevel();
+    const bool localLevels = options.HasLocalLevels();
 
     for (int level = tree.MaxLevel; level > smallest; --level)
     {
@@ -249,12 +255,13 @@ public:
       // idempotent ("until the sample cell is fine enough"), so the result does not depend on
       // the order of the requests, nor on the number of threads.
       auto& leaves = leavesByLevel[level];
-      ScanKernel scan{ &map, &options, &leaves, &directions, level, {}, {} };
+      ScanKernel scan{ &map, &options, &leaves, &directions, level, localLevels, {}, {} };
       executor.For(0, static_cast<std::int64_t>(leaves.size()), 4096, scan);
       const std::vector<Request> requests = scan.TakeFound();
       for (const Request& request : requests)
       {
-        while (IsTooCoarse(map, options, request.Sample, request.Level, request.LocalLevel))
+        while (
+          IsTooCoarse(map, options, localLevels, request.Sample, request.Level, request.LocalLevel))
         {
           const int neighborLevel = map.LevelAt(request.Sample);
           const LatticeIndex<Dim> neighborAnchor = map.AnchorOf(request.Sample, neighborLevel);

@@ -480,6 +480,10 @@ private:
   /// No leaf corner on the boundary besides the face's corners: no edge of the face is split.
   bool IsBoundaryRegular(const Face& face) const
   {
+    if (face.Level == this->Tree->MaxLevel)
+    {
+      return true; // no leaf is finer
+    }
     const LatticeIndex<Dim>& size = this->Size(face);
     for (int edgeAxis = 0; edgeAxis < Dim; ++edgeAxis)
     {
@@ -554,6 +558,19 @@ private:
         }
       }
     }
+    if (face.FreeAxes == (face.FreeAxes & (~face.FreeAxes + 1u)))
+    {
+      // An unsplit edge: its two end points.
+      const Point first = HalfUnits(face.Anchor);
+      Point second = first;
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        second[axis] += (face.FreeAxes & (1u << axis)) ? 2 * this->Size(face)[axis] : 0;
+      }
+      out.push_back(first);
+      out.push_back(second);
+      return;
+    }
     this->TriangulateUnsplit(face, out, scratch);
   }
 
@@ -562,8 +579,9 @@ private:
     const int k = PopCount(face.FreeAxes);
     if ((k < 3 || this->TemplateAllowed[face.Level]) && this->IsBoundaryRegular(face))
     {
-      this->AppendTemplate(
-        HalfUnits(face.Anchor), this->Size(face), this->Parity(face), face.FreeAxes, out);
+      const int parity =
+        k >= 2 && this->Options.Template == CellTemplate::Checkerboard ? this->Parity(face) : 0;
+      this->AppendTemplate(HalfUnits(face.Anchor), this->Size(face), parity, face.FreeAxes, out);
       return;
     }
     // Recursive midpoint rule: cone from the centre over the triangulated facets.
@@ -604,7 +622,12 @@ private:
     unsigned freeAxes, std::vector<Point>& out) const
   {
     const int k = PopCount(freeAxes);
-    auto corner = [&](unsigned c) { return Corner(anchor, size, freeAxes, c); };
+    std::array<Point, CubeInfo<Dim>::VerticesPerCell> corners;
+    for (unsigned c = 0; c < (1u << k); ++c)
+    {
+      corners[c] = Corner(anchor, size, freeAxes, c);
+    }
+    auto corner = [&corners](unsigned c) -> const Point& { return corners[c]; };
     if (k == 1)
     {
       out.push_back(corner(0));
