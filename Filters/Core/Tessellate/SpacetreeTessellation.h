@@ -157,6 +157,8 @@ public:
       return Status::Invalid("the checkerboard template exists for dimensions 1 to 3 only");
     }
     this->Tree = &tree;
+    this->Sizes = tree.CellSizes.data();
+    this->MaxLevel = tree.MaxLevel;
     this->Options = options;
     this->BuildLevelTables();
     this->BuildRegularCellTables();
@@ -346,10 +348,7 @@ private:
     return this->CanonicalLevels[(static_cast<std::size_t>(level) << Dim) | axes];
   }
 
-  const LatticeIndex<Dim>& Size(const Face& face) const
-  {
-    return this->Tree->GetCellSize(face.Level);
-  }
+  const LatticeIndex<Dim>& Size(const Face& face) const { return this->Sizes[face.Level]; }
 
   /// Parity of the sum of the level coordinates of a face's anchor.
   int Parity(const Face& face) const
@@ -433,12 +432,12 @@ private:
   /// Whether a face at its canonical level is split by finer leaves.
   bool IsSplit(const Face& face) const
   {
-    if (face.Level == this->Tree->MaxLevel)
+    if (face.Level == this->MaxLevel)
     {
       return false;
     }
-    const LatticeIndex<Dim>& size = this->Size(face);
-    const LatticeIndex<Dim>& childSize = this->Tree->GetCellSize(face.Level + 1);
+    const LatticeIndex<Dim> size = this->Size(face);
+    const LatticeIndex<Dim> childSize = this->Sizes[face.Level + 1];
     LatticeIndex<Dim> inner = face.Anchor;
     bool allSplit = true;
     for (int axis = 0; axis < Dim; ++axis)
@@ -480,11 +479,11 @@ private:
   /// No leaf corner on the boundary besides the face's corners: no edge of the face is split.
   bool IsBoundaryRegular(const Face& face) const
   {
-    if (face.Level == this->Tree->MaxLevel)
+    if (face.Level == this->MaxLevel)
     {
       return true; // no leaf is finer
     }
-    const LatticeIndex<Dim>& size = this->Size(face);
+    const LatticeIndex<Dim> size = this->Size(face);
     for (int edgeAxis = 0; edgeAxis < Dim; ++edgeAxis)
     {
       if (!(face.FreeAxes & (1u << edgeAxis)))
@@ -492,11 +491,11 @@ private:
         continue;
       }
       const int edgeLevel = this->CanonicalLevel(face.Level, 1u << edgeAxis);
-      if (edgeLevel == this->Tree->MaxLevel)
+      if (edgeLevel == this->MaxLevel)
       {
         continue; // this axis is never split again
       }
-      const std::int64_t step = this->Tree->GetCellSize(edgeLevel + 1)[edgeAxis];
+      const std::int64_t step = this->Sizes[edgeLevel + 1][edgeAxis];
       const unsigned others = face.FreeAxes & ~(1u << edgeAxis);
       // Enumerate the subsets of the other free axes: each is one edge parallel to edgeAxis.
       unsigned subset = 0;
@@ -532,8 +531,8 @@ private:
     face.Level = this->CanonicalLevel(face.Level, face.FreeAxes);
     if (this->IsSplit(face))
     {
-      const LatticeIndex<Dim>& size = this->Size(face);
-      const LatticeIndex<Dim>& childSize = this->Tree->GetCellSize(face.Level + 1);
+      const LatticeIndex<Dim> size = this->Size(face);
+      const LatticeIndex<Dim> childSize = this->Sizes[face.Level + 1];
       Face child{ face.Anchor, face.Level + 1, face.FreeAxes };
       for (;;)
       {
@@ -822,6 +821,9 @@ private:
   };
 
   const Spacetree<Dim>* Tree = nullptr;
+  /// The tree's level table and finest level, at hand for the recursion.
+  const LatticeIndex<Dim>* Sizes = nullptr;
+  int MaxLevel = 0;
   SpacetreeTessellationOptions Options;
   LatticeIndex<Dim> LatticeDimensions{};
   std::vector<std::int8_t> CanonicalLevels;
