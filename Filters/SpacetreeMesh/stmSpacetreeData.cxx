@@ -264,7 +264,7 @@ bool ReadLeaves(vtkDataArray* levels, vtkDataArray* materials, vtkDataArray* ind
         stm::LatticeIndex<Dim> anchor{};
         if (good)
         {
-          const stm::LatticeIndex<Dim>& size = tree.GetCellSize(static_cast<int>(level));
+          const stm::LatticeIndex<Dim> size = tree.GetCellSize(static_cast<int>(level));
           for (int axis = 0; axis < Dim; ++axis)
           {
             const double index = typedIndices ? typedIndices->GetTypedComponent(leaf, axis)
@@ -440,7 +440,7 @@ void WriteSpacetree(const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry&
   auto cornerOf = [&tree](vtkIdType leaf, int c)
   {
     stm::LatticeIndex<Dim> corner = tree.LeafAnchors[leaf];
-    const stm::LatticeIndex<Dim>& size = tree.GetCellSize(tree.LeafLevels[leaf]);
+    const stm::LatticeIndex<Dim> size = tree.GetCellSize(tree.LeafLevels[leaf]);
     for (int axis = 0; axis < Dim; ++axis)
     {
       corner[axis] += ((c >> axis) & 1) * size[axis];

@@ -155,7 +155,7 @@ class SpacetreeBalancer
           ? this->Options->template LocalLevel<Dim>(
               anchor, this->Map->CellSize(this->Level), this->Map->MaterialAt(anchor))
           : this->Options->BalanceLevel;
-        const LatticeIndex<Dim>& size = this->Map->CellSize(this->Level);
+        const LatticeIndex<Dim> size = this->Map->CellSize(this->Level);
         for (const auto& direction : *this->Directions)
         {
           LatticeIndex<Dim> sample;
@@ -293,7 +293,7 @@ template <int Dim, class Visitor>
 void ForEachAdjacentCell(const Spacetree<Dim>& tree, const LevelMap<Dim>& map, std::int64_t leaf,
   const std::vector<LatticeIndex<Dim>>& directions, Visitor&& visit)
 {
-  const LatticeIndex<Dim>& size = tree.GetCellSize(tree.LeafLevels[leaf]);
+  const LatticeIndex<Dim> size = tree.GetCellSize(tree.LeafLevels[leaf]);
   const auto& anchor = tree.LeafAnchors[leaf];
   for (const auto& direction : directions)
   {

@@ -105,7 +105,7 @@ private:
     std::vector<std::vector<LatticeIndex<Dim>>>& leavesByLevel)
   {
     const LatticeIndex<Dim>& radius = tree.GetCellSize(coarse);
-    const LatticeIndex<Dim>& size = tree.GetCellSize(level);
+    const LatticeIndex<Dim> size = tree.GetCellSize(level);
     LatticeIndex<Dim> lo, hi;
     for (int axis = 0; axis < Dim; ++axis)
     {

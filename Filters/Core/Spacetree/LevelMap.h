@@ -82,7 +82,7 @@ public:
   /// Anchor of the leaf of the given level that contains the cell.
   LatticeIndex<Dim> AnchorOf(const LatticeIndex<Dim>& cell, int level) const
   {
-    const LatticeIndex<Dim>& size = this->CellSize(level);
+    const LatticeIndex<Dim> size = this->CellSize(level);
     LatticeIndex<Dim> anchor;
     for (int axis = 0; axis < Dim; ++axis)
     {
@@ -94,7 +94,7 @@ public:
   /// Marks the region of a leaf as covered by a leaf of this level and material.
   void Fill(const LatticeIndex<Dim>& anchor, int level, MaterialIndex material)
   {
-    const LatticeIndex<Dim>& size = this->CellSize(level);
+    const LatticeIndex<Dim> size = this->CellSize(level);
     this->ForEachRow(anchor, size,
       [&](std::int64_t rowStart)
       {
@@ -109,7 +109,7 @@ public:
   /// Splits the leaf (level, anchor) into its children; the children keep its material.
   void Split(const LatticeIndex<Dim>& anchor, int level)
   {
-    const LatticeIndex<Dim>& size = this->CellSize(level);
+    const LatticeIndex<Dim> size = this->CellSize(level);
     this->ForEachRow(anchor, size,
       [&](std::int64_t rowStart)
       {
@@ -181,7 +181,7 @@ private:
   /// Calls row(linearIndexOfFirstCell) for every axis-0 row of a box region.
   template <class RowFunction>
   void ForEachRow(
-    const LatticeIndex<Dim>& anchor, const LatticeIndex<Dim>& size, RowFunction&& row) const
+    const LatticeIndex<Dim>& anchor, const LatticeIndex<Dim> size, RowFunction&& row) const
   {
     std::int64_t rows = 1;
     for (int axis = 1; axis < Dim; ++axis)

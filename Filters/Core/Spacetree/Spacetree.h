@@ -119,8 +119,8 @@ public:
   static void VisitChildren(const std::vector<LatticeIndex<Dim>>& cellSizes,
     const LatticeIndex<Dim>& anchor, int level, Visitor&& visit)
   {
-    const LatticeIndex<Dim>& size = cellSizes[level];
-    const LatticeIndex<Dim>& childSize = cellSizes[level + 1];
+    const LatticeIndex<Dim> size = cellSizes[level];
+    const LatticeIndex<Dim> childSize = cellSizes[level + 1];
     LatticeIndex<Dim> child = anchor;
     for (;;)
     {

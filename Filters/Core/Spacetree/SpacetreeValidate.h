@@ -116,7 +116,7 @@ Status ValidateSpacetree(const Spacetree<Dim>& tree)
     {
       return Status::Invalid("leaf " + std::to_string(leaf) + " has an unknown material");
     }
-    const LatticeIndex<Dim>& size = tree.GetCellSize(level);
+    const LatticeIndex<Dim> size = tree.GetCellSize(level);
     const LatticeIndex<Dim>& anchor = tree.LeafAnchors[leaf];
     for (int axis = 0; axis < Dim; ++axis)
     {

@@ -353,7 +353,7 @@ private:
   /// Parity of the sum of the level coordinates of a face's anchor.
   int Parity(const Face& face) const
   {
-    const LatticeIndex<Dim>& size = this->Size(face);
+    const LatticeIndex<Dim> size = this->Size(face);
     std::int64_t sum = 0;
     for (int axis = 0; axis < Dim; ++axis)
     {
@@ -390,7 +390,7 @@ private:
   std::array<Point, CubeInfo<Dim>::VerticesPerCell> LeafCorners(std::int64_t leaf) const
   {
     const Face cell = this->LeafFace(leaf);
-    const LatticeIndex<Dim>& size = this->Size(cell);
+    const LatticeIndex<Dim> size = this->Size(cell);
     std::array<Point, CubeInfo<Dim>::VerticesPerCell> corners;
     for (int c = 0; c < CubeInfo<Dim>::VerticesPerCell; ++c)
     {
@@ -586,7 +586,7 @@ private:
     // Recursive midpoint rule: cone from the centre over the triangulated facets.
     std::vector<Point>& facets = scratch.FacetBuffers[k - 1];
     facets.clear();
-    const LatticeIndex<Dim>& size = this->Size(face);
+    const LatticeIndex<Dim> size = this->Size(face);
     for (int axis = 0; axis < Dim; ++axis)
     {
       if (!(face.FreeAxes & (1u << axis)))
@@ -698,7 +698,7 @@ private:
       const Spacetree<Dim>& tree = *this->Self->Tree;
       for (std::int64_t leaf = begin; leaf < end; ++leaf)
       {
-        const LatticeIndex<Dim>& size = tree.GetCellSize(tree.LeafLevels[leaf]);
+        const LatticeIndex<Dim> size = tree.GetCellSize(tree.LeafLevels[leaf]);
         for (int c = 0; c < CubeInfo<Dim>::VerticesPerCell; ++c)
         {
           LatticeIndex<Dim> corner = tree.LeafAnchors[leaf];
