@@ -171,13 +171,16 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
 
   // The pattern, per spacetree axis: three counts per image axis, or Dim counts.
   std::vector<std::vector<int>> entries;
-  std::string parseError;
-  bool perImageAxis = stm::ParseRefinementPattern(request.Pattern, 3, entries, parseError);
-  if (!perImageAxis &&
-    (Dim == 3 || !stm::ParseRefinementPattern(request.Pattern, Dim, entries, error)))
+  const bool perImageAxis = stm::ParseRefinementPattern(request.Pattern, 3, entries, error);
+  if (!perImageAxis)
   {
-    error = parseError;
-    return false;
+    // A 2D image may also give only the counts of its two axes; report the 3-count error.
+    std::string ignored;
+    if (Dim == 3 || !stm::ParseRefinementPattern(request.Pattern, Dim, entries, ignored))
+    {
+      return false;
+    }
+    error.clear();
   }
   for (const auto& entry : entries)
   {

@@ -208,7 +208,6 @@ public:
       running += here;
     }
     this->NumberOfPoints = this->PointSet.BuildRank();
-    this->Map.reset();
     executor.ReportProgress(0.5);
     return Status::Ok();
   }
@@ -221,8 +220,9 @@ public:
   template <class IdType, class Executor>
   Status WriteSimplices(IdType* connectivity, MaterialIndex* materials, Executor& executor)
   {
-    if (this->NeedsLevelMap)
+    if (this->NeedsLevelMap && !this->Map)
     {
+      // Prepare's map was released by an earlier WriteSimplices.
       this->Map.reset(new LevelMap<Dim>());
       const Status status = this->Map->Build(*this->Tree, executor);
       if (!status.IsOk())
@@ -829,8 +829,8 @@ private:
   std::vector<std::int8_t> CanonicalLevels;
   std::vector<std::uint8_t> TemplateAllowed;
   bool NeedsLevelMap = false;
-  /// Levels of the leaves per lattice cell, while Prepare and WriteSimplices run, for patterns
-  /// that leave axes unsplit.
+  /// Levels of the leaves per lattice cell, from Prepare to the end of WriteSimplices, for
+  /// patterns that leave axes unsplit.
   std::unique_ptr<LevelMap<Dim>> Map;
   LatticeBitset<Dim> VertexSet;
   LatticeBitset<Dim> PointSet;
