@@ -6,7 +6,10 @@ Usage: TestStmesh.py --stmesh EXE --helper EXE --aal AAL.nii.gz --work DIR CASE
 
 Each case runs stmesh in a fresh DIR and checks the exit code, the messages and the files
 written; meshes are read back with stmeshTestHelper (VTK readers), which also writes the small
-label images used for the format and error cases. Exits 0 when the case passes.
+label images used for the format and error cases. The cases of --elements, --templates,
+--cell-template and --boundary-layer write their own label images and read the meshes back with
+the VTK Python modules (Debian's python3 sees them; CMake runs this script with it). Exits 0 when
+the case passes.
 """
 
 import argparse
@@ -19,13 +22,19 @@ import subprocess
 import sys
 
 ERROR_PREFIX = "stmesh: error:"
-TRIANGLE, QUAD, TETRA, HEXAHEDRON = 5, 9, 10, 12
+TRIANGLE, QUAD, TETRA, HEXAHEDRON, PYRAMID = 5, 9, 10, 12, 14
+CELL_TYPE_NAMES = {TRIANGLE: "triangle", QUAD: "quad", TETRA: "tetra", HEXAHEDRON: "hexahedron",
+                   PYRAMID: "pyramid"}
 STAGES_TESSELLATE = ["read", "spacetree", "balance", "tessellate", "write"]
 # The spacetree parameters of the summary when none of their options is given.
 DEFAULT_SPACETREE_PARAMETERS = {
     "pattern": "auto", "root_cell_size": None, "max_cell_size_labels": {},
     "refine_region": None, "grading": None, "sizing_array": None, "balance_labels": {},
     "balance_region": None}
+# The tessellation parameters of the summary when none of their options is given.
+DEFAULT_TESSELLATE_PARAMETERS = {
+    "elements": "simplicial", "templates": "regular", "cell_template": "checkerboard",
+    "boundary_layers": 0}
 
 
 class CaseFailed(Exception):
@@ -174,7 +183,9 @@ def case_help_and_version(c):
                    "--root-cell-size X,Y,Z", "--max-cell-size-label L:S", "--refine-region",
                    "box:X0,Y0,Z0,X1,Y1,Z1", "sphere:CX,CY,CZ,R", "cylinder:CX,CY,CZ,AX,AY,AZ,R",
                    "slab:PX,PY,PZ,NX,NY,NZ,W", "--grading G", "--sizing-array NAME",
-                   "--balance-label L:LEVEL", "--balance-region REGION:LEVEL"]:
+                   "--balance-label L:LEVEL", "--balance-region REGION:LEVEL",
+                   "--elements simplicial|hybrid|leaves", "--templates midpoint|regular|extended",
+                   "--cell-template checkerboard|kuhn", "--boundary-layer N"]:
         check(option in out, "help does not mention %s" % option)
     out, _ = c.run_ok(["-h"])
     check(out.startswith("Usage: stmesh"), "-h does not print the usage")
@@ -193,7 +204,8 @@ def case_default_input_vtu(c):
     check(summary["output"] == output, "bad output in summary")
     check(summary["parameters"] == dict(
         {"labels": [], "all_labels": True, "max_cell_size": 16, "balance": 1,
-         "stop_after": "tessellate", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS),
+         "stop_after": "tessellate", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS,
+        **DEFAULT_TESSELLATE_PARAMETERS),
         "bad parameters %s" % summary["parameters"])
     # 1 mm voxels, MaxCellSize 16: cubes of 16 down to 1 voxel.
     check(summary["voxel_subdivision"] == [1, 1, 1], "bad voxel subdivision")
@@ -359,7 +371,8 @@ def case_summary_json(c):
         check(key in summary, "summary lacks %s" % key)
     check(summary["parameters"] == dict(
         {"labels": [2, 7], "all_labels": False, "max_cell_size": 4, "balance": 2,
-         "stop_after": "tessellate", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS),
+         "stop_after": "tessellate", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS,
+        **DEFAULT_TESSELLATE_PARAMETERS),
         "bad parameters %s" % summary["parameters"])
     check(summary["spacetree_axes"] == [0, 1, 2], "bad spacetree axes")
     check(summary["voxel_subdivision"] == [1, 1, 1], "bad voxel subdivision")
@@ -373,6 +386,20 @@ def case_summary_json(c):
           "total shorter than the stages")
     check(sorted(summary["tetrahedra_per_material"]) == ["2", "7"], "bad materials")
     check_mesh_against_summary(c.read_back(output), summary, TETRA, "tetrahedra_per_material")
+    # The tessellate stage's own figures; the volume share of hexahedra only for hybrid and
+    # leaves output.
+    tessellate = stage(summary, "tessellate")
+    check(tessellate["cells_by_type"] == {"tetra": tessellate["cells"]},
+          "bad cells_by_type %s" % tessellate["cells_by_type"])
+    check(isinstance(tessellate["inserted_points"], int) and
+          0 < tessellate["inserted_points"] < tessellate["points"],
+          "bad inserted_points %s" % tessellate["inserted_points"])
+    check("hexahedron_volume_fraction" not in tessellate,
+          "hexahedron_volume_fraction in a simplicial run")
+    for entry in summary["stages"]:
+        if entry["name"] != "tessellate":
+            check("inserted_points" not in entry and "cells_by_type" not in entry,
+                  "stage %s has tessellation figures" % entry["name"])
     c.run_failing([image, "-o", c.path("same.vtu"), "--summary", c.path("same.vtu")], 1,
                   "same file", output=c.path("same.vtu"))
     # An unwritable summary fails before any meshing.
@@ -912,6 +939,425 @@ def case_error_spacetree_filter_errors(c):
                   line.startswith(ERROR_PREFIX + " balancing the spacetree:")
                   for line in err.splitlines()),
               "the message does not name the stage")
+
+
+# ------------------------------------------------------------------------------------------------
+# The tessellation options (--elements, --templates, --cell-template, --boundary-layer), on label
+# images written here; the meshes are read back with VTK's readers through its Python modules.
+
+def vtk_modules():
+    """The VTK classes these cases use; Debian's /usr/bin/python3 sees ParaView's vtkmodules."""
+    try:
+        from vtkmodules.vtkCommonCore import vtkCommand
+        from vtkmodules.vtkCommonDataModel import vtkImageData
+        from vtkmodules.vtkFiltersVerdict import vtkCellSizeFilter
+        from vtkmodules.vtkIOImage import vtkNIFTIImageWriter
+        from vtkmodules.vtkIOLegacy import vtkUnstructuredGridReader
+        from vtkmodules.vtkIOXML import vtkXMLImageDataWriter, vtkXMLUnstructuredGridReader
+    except ImportError as error:
+        raise CaseFailed("%s cannot import the VTK Python modules (%s); run this script with "
+                         "Debian's /usr/bin/python3" % (sys.executable, error))
+    return dict(vtkCommand=vtkCommand, vtkImageData=vtkImageData,
+                vtkCellSizeFilter=vtkCellSizeFilter, vtkNIFTIImageWriter=vtkNIFTIImageWriter,
+                vtkUnstructuredGridReader=vtkUnstructuredGridReader,
+                vtkXMLImageDataWriter=vtkXMLImageDataWriter,
+                vtkXMLUnstructuredGridReader=vtkXMLUnstructuredGridReader)
+
+
+def watched(algorithm, errors):
+    vtk = vtk_modules()
+    algorithm.AddObserver(vtk["vtkCommand"].ErrorEvent,
+                          lambda caller, event: errors.append("%s failed" % caller.GetClassName()))
+    return algorithm
+
+
+def write_label_image(c, name, dimensions, label):
+    """A uint8 label image of 1 mm voxels, one voxel per point, label(i, j, k) each, as .vti
+    (inline binary) or .nii; returns its path and the voxels per non-zero label."""
+    vtk = vtk_modules()
+    image = vtk["vtkImageData"]()
+    image.SetDimensions(*dimensions)
+    image.AllocateScalars(3, 1)  # VTK_UNSIGNED_CHAR
+    scalars = image.GetPointData().GetScalars()
+    scalars.SetName("labels")
+    voxels = {}
+    index = 0
+    for k in range(dimensions[2]):
+        for j in range(dimensions[1]):
+            for i in range(dimensions[0]):
+                value = label(i, j, k)
+                scalars.SetValue(index, value)
+                if value:
+                    voxels[str(value)] = voxels.get(str(value), 0) + 1
+                index += 1
+    path = c.path(name)
+    errors = []
+    if name.endswith(".vti"):
+        writer = watched(vtk["vtkXMLImageDataWriter"](), errors)
+        writer.SetDataModeToBinary()  # inline: Debian 12's libexpat fails on appended data
+    else:
+        writer = watched(vtk["vtkNIFTIImageWriter"](), errors)
+    writer.SetInputData(image)
+    writer.SetFileName(path)
+    writer.Write()
+    check(not errors and os.path.getsize(path) > 0, "cannot write %s: %s" % (name, errors))
+    return path, voxels
+
+
+def two_boxes(i, j, k):
+    """Labels 1 and 2: two touching boxes of 4 x 6 x 6 and 3 x 6 x 6 voxels in 12 x 10 x 8."""
+    if 1 <= j <= 6 and 1 <= k <= 6:
+        if 2 <= i <= 5:
+            return 1
+        if 6 <= i <= 8:
+            return 2
+    return 0
+
+
+def ball(i, j, k):
+    """Label 1: a ball of radius 5 voxels, label 3: a small box inside it, in 16 x 15 x 14."""
+    if 6 <= i <= 8 and 6 <= j <= 7 and 5 <= k <= 8:
+        return 3
+    return 1 if (i - 7) ** 2 + (j - 7) ** 2 + (k - 6) ** 2 <= 25 else 0
+
+
+def read_mesh(path):
+    """The mesh of a .vtu (XML, inline binary) or legacy .vtk file, read by VTK's readers, as a
+    dict: cells, points, cell types (VTK numbers) per cell, Material per cell, the volume (area
+    of a 2D mesh) of every cell by vtkCellSizeFilter, the point array HangingNode (None
+    without it) and the points in quarter millimetres (exact for the 1 mm voxels used here)."""
+    vtk = vtk_modules()
+    errors = []
+    if path.endswith(".vtu"):
+        with open(path, "rb") as mesh_file:
+            head = mesh_file.read(4096)
+        check(b'format="binary"' in head and b"<AppendedData" not in head,
+              "%s is not inline binary XML" % path)
+        reader = watched(vtk["vtkXMLUnstructuredGridReader"](), errors)
+    else:
+        reader = watched(vtk["vtkUnstructuredGridReader"](), errors)
+    reader.SetFileName(path)
+    reader.Update()
+    grid = reader.GetOutput()
+    check(not errors and grid is not None and grid.GetNumberOfCells() > 0,
+          "cannot read back %s: %s" % (path, errors))
+    sizes = watched(vtk["vtkCellSizeFilter"](), errors)
+    sizes.SetInputData(grid)
+    sizes.Update()
+    check(not errors, "vtkCellSizeFilter failed on %s" % path)
+    cell_data = sizes.GetOutput().GetCellData()
+    materials = grid.GetCellData().GetArray("Material")
+    check(materials is not None, "%s has no cell array Material" % path)
+    cells = grid.GetNumberOfCells()
+    types = [grid.GetCellType(cell) for cell in range(cells)]
+    measure_arrays = [cell_data.GetArray(name) for name in ("Volume", "Area")]
+    measures = []
+    for cell in range(cells):
+        array = measure_arrays[0] if types[cell] in (TETRA, PYRAMID, HEXAHEDRON) else measure_arrays[1]
+        measures.append(array.GetValue(cell))
+    hanging = grid.GetPointData().GetArray("HangingNode")
+    return {"cells": cells, "points": grid.GetNumberOfPoints(), "types": types,
+            "materials": [int(materials.GetTuple1(cell)) for cell in range(cells)],
+            "measures": measures,
+            "quarter_mm_points": [tuple(int(round(4 * x)) for x in grid.GetPoint(point))
+                                  for point in range(grid.GetNumberOfPoints())],
+            "hanging": None if hanging is None else
+            [int(hanging.GetTuple1(point)) for point in range(grid.GetNumberOfPoints())]}
+
+
+def count_by_type(mesh):
+    counts = {}
+    for cell_type in mesh["types"]:
+        name = CELL_TYPE_NAMES.get(cell_type, "type_%d" % cell_type)
+        counts[name] = counts.get(name, 0) + 1
+    return counts
+
+
+def count_by_material(mesh):
+    counts = {}
+    for material in mesh["materials"]:
+        counts[str(material)] = counts.get(str(material), 0) + 1
+    return counts
+
+
+def volume_by_material(mesh):
+    volumes = {}
+    for material, measure in zip(mesh["materials"], mesh["measures"]):
+        volumes[str(material)] = volumes.get(str(material), 0.0) + measure
+    return volumes
+
+
+def check_volume_equals_voxels(mesh, voxels, what):
+    """Every cell has a positive measure and every body material's volume is its voxels'."""
+    check(min(mesh["measures"]) > 0, "%s: a cell has measure %r" % (what, min(mesh["measures"])))
+    volumes = volume_by_material(mesh)
+    volumes.pop("0", None)
+    check(sorted(volumes) == sorted(voxels),
+          "%s: materials %s, voxels of %s" % (what, sorted(volumes), sorted(voxels)))
+    for material, count in voxels.items():
+        check(abs(volumes[material] - count) <= 1e-9 * count,
+              "%s: material %s measures %r, its voxels %d" % (what, material, volumes[material],
+                                                             count))
+
+
+def spacetree_corners(c, image, arguments=()):
+    """The corners of all leaves (body and background) of the balanced spacetree, in quarter
+    millimetres."""
+    mesh_run(c, image, "tree", list(arguments), stop_after="balance")
+    return set(read_mesh(c.path("tree.vtu"))["quarter_mm_points"])
+
+
+def check_inserted_points(tessellate, mesh, corners, what):
+    """inserted_points counts the mesh points that are no spacetree vertex (face and cell
+    centres)."""
+    new = sum(1 for point in mesh["quarter_mm_points"] if point not in corners)
+    check(tessellate["inserted_points"] == new,
+          "%s: inserted_points %d, but %d points of the mesh are no leaf corner" %
+          (what, tessellate["inserted_points"], new))
+
+
+def tessellate_run(c, image, name, arguments, extension=".vtu"):
+    """stmesh IMAGE -o NAME.vtu --summary NAME.json ARGUMENTS: the summary, the tessellate
+    stage, the read-back mesh and stderr, after checking that the summary agrees with the file:
+    cells, points, cells per type and per material, and the hexahedron volume share."""
+    output, summary_path = c.path(name + extension), c.path(name + ".json")
+    out, err = c.run_ok([image, "-o", output, "--summary", summary_path] + arguments)
+    summary, mesh = load_summary(summary_path), read_mesh(output)
+    tessellate = stage(summary, "tessellate")
+    check(tessellate["cells"] == mesh["cells"] and tessellate["points"] == mesh["points"],
+          "%s: the summary says %d cells, %d points, the file has %d, %d" %
+          (name, tessellate["cells"], tessellate["points"], mesh["cells"], mesh["points"]))
+    check(tessellate["cells_by_type"] == count_by_type(mesh),
+          "%s: cells_by_type %s, the file has %s" % (name, tessellate["cells_by_type"],
+                                                     count_by_type(mesh)))
+    elements = summary["parameters"]["elements"]
+    key = "cells_per_material" if elements != "simplicial" else \
+        "triangles_per_material" if TRIANGLE in mesh["types"] else "tetrahedra_per_material"
+    check(summary.get(key) == count_by_material(mesh),
+          "%s: %s %s, the file has %s" % (name, key, summary.get(key), count_by_material(mesh)))
+    # The printed line below the table.
+    line = "tessellate: " + ", ".join("%d %s" % (count, type_name) for type_name, count in
+                                      tessellate["cells_by_type"].items())
+    line += "; %d inserted points" % tessellate["inserted_points"]
+    if elements == "simplicial":
+        check("hexahedron_volume_fraction" not in tessellate,
+              "%s: hexahedron_volume_fraction in simplicial output" % name)
+    else:
+        boxes = sum(m for t, m in zip(mesh["types"], mesh["measures"]) if t in (HEXAHEDRON, QUAD))
+        fraction = boxes / sum(mesh["measures"])
+        check(abs(tessellate["hexahedron_volume_fraction"] - fraction) <= 1e-9,
+              "%s: hexahedron_volume_fraction %r, the file's cells give %r" %
+              (name, tessellate["hexahedron_volume_fraction"], fraction))
+        line += "; %s fraction %.4f" % ("quad area" if QUAD in mesh["types"] or
+                                        TRIANGLE in mesh["types"] else "hexahedron volume",
+                                        tessellate["hexahedron_volume_fraction"])
+    check(line in out.splitlines(), "%s: stdout lacks the line %r" % (name, line))
+    return summary, tessellate, mesh, err
+
+
+def case_option_elements_hybrid_uniform(c):
+    # --max-cell-size 1: every leaf is a voxel, so no face has an extra vertex: the hybrid mesh
+    # is the voxels themselves, the simplicial one their checkerboard templates.
+    for name in ["boxes.vti", "boxes.nii"]:
+        image, voxels = write_label_image(c, name, (12, 10, 8), two_boxes)
+        check(voxels == {"1": 144, "2": 108}, "bad test image: %s" % voxels)
+        stem = name.replace(".", "_")
+        summary, tessellate, mesh, _ = tessellate_run(
+            c, image, stem + "_hybrid", ["--elements", "hybrid", "--max-cell-size", "1"])
+        check(summary["parameters"] == dict(
+            {"labels": [], "all_labels": True, "max_cell_size": 1, "balance": 1,
+             "stop_after": "tessellate", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS,
+            **dict(DEFAULT_TESSELLATE_PARAMETERS, elements="hybrid")),
+            "bad parameters %s" % summary["parameters"])
+        check(tessellate["cells_by_type"] == {"hexahedron": 252},
+              "%s: cells %s, expected 252 hexahedra" % (name, tessellate["cells_by_type"]))
+        check(summary["cells_per_material"] == voxels, "%s: hexahedra per material %s" %
+              (name, summary["cells_per_material"]))
+        check(tessellate["inserted_points"] == 0, "%s: inserted points in a uniform tree" % name)
+        check(tessellate["hexahedron_volume_fraction"] == 1, "%s: hexahedron volume fraction %r"
+              % (name, tessellate["hexahedron_volume_fraction"]))
+        # (7 x 7 x 7) corners of the 7 x 6 x 6 voxel block.
+        check(mesh["points"] == 8 * 7 * 7, "%s: %d points" % (name, mesh["points"]))
+        check(mesh["hanging"] is None, "%s: hybrid output has a HangingNode array" % name)
+        check_volume_equals_voxels(mesh, voxels, name + " hybrid")
+    # The same in legacy VTK.
+    _, _, legacy, _ = tessellate_run(c, image, "boxes_hybrid_legacy",
+                                     ["--elements", "hybrid", "--max-cell-size", "1"], ".vtk")
+    check(legacy["types"] == mesh["types"] and legacy["materials"] == mesh["materials"],
+          "the .vtk and .vtu hybrid meshes differ")
+
+
+def case_option_cell_template(c):
+    image, voxels = write_label_image(c, "boxes.vti", (12, 10, 8), two_boxes)
+    for arguments, per_voxel in [([], 5), (["--cell-template", "checkerboard"], 5),
+                                 (["--cell-template", "kuhn"], 6),
+                                 (["--cell-template=kuhn", "--templates", "midpoint"], None)]:
+        name = "_".join(a.strip("-").replace("=", "_") for a in arguments) or "default"
+        summary, tessellate, mesh, _ = tessellate_run(c, image, name,
+                                                      ["--max-cell-size", "1"] + arguments)
+        check(summary["parameters"]["cell_template"] == ("kuhn" if per_voxel != 5 else
+                                                        "checkerboard"),
+              "%s: cell_template %s" % (name, summary["parameters"]["cell_template"]))
+        if per_voxel:
+            check(tessellate["cells_by_type"] == {"tetra": per_voxel * 252},
+                  "%s: %s, expected %d tetrahedra per voxel" %
+                  (name, tessellate["cells_by_type"], per_voxel))
+            check(tessellate["inserted_points"] == 0, "%s: inserted points" % name)
+            check(summary["tetrahedra_per_material"] ==
+                  {m: per_voxel * n for m, n in voxels.items()}, "%s: per material" % name)
+        else:
+            # The midpoint rule splits every face and voxel at its centre: 12 tetrahedra per
+            # face, 6 faces, and the template no longer matters.
+            check(tessellate["cells_by_type"] == {"tetra": 24 * 252},
+                  "%s: %s, expected 24 tetrahedra per voxel" % (name, tessellate["cells_by_type"]))
+            check(tessellate["inserted_points"] > 0, "%s: no inserted points" % name)
+        check_volume_equals_voxels(mesh, voxels, name)
+
+
+def case_option_elements_hybrid(c):
+    image, voxels = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    _, leaves_stage, leaves_mesh, _ = tessellate_run(c, image, "leaves", ["--elements", "leaves"])
+    summary, tessellate, mesh, _ = tessellate_run(c, image, "hybrid", ["--elements", "hybrid"])
+    counts = tessellate["cells_by_type"]
+    check(sorted(counts) == ["hexahedron", "pyramid", "tetra"] and min(counts.values()) > 0,
+          "hybrid cells %s: expected hexahedra, pyramids and tetrahedra" % counts)
+    check(0 < tessellate["hexahedron_volume_fraction"] < 1,
+          "hexahedron volume fraction %r" % tessellate["hexahedron_volume_fraction"])
+    check_volume_equals_voxels(mesh, voxels, "hybrid")
+    check(abs(sum(mesh["measures"]) - sum(voxels.values())) <= 1e-9 * sum(voxels.values()),
+          "the hybrid mesh measures %r, the body's voxels %d" %
+          (sum(mesh["measures"]), sum(voxels.values())))
+    # The points are spacetree vertices or the inserted face and cell centres; the leaves
+    # output has only the corners of the body's leaves.
+    corners = spacetree_corners(c, image)
+    check(tessellate["inserted_points"] > 0, "no inserted points")
+    check_inserted_points(tessellate, mesh, corners, "hybrid")
+    check_inserted_points(leaves_stage, leaves_mesh, corners, "leaves")
+    check(leaves_stage["inserted_points"] == 0, "leaves output inserted points")
+    # --templates and --cell-template do not apply to hybrid output: a warning, the same mesh.
+    _, _, same, err = tessellate_run(c, image, "hybrid_templates",
+                                     ["--elements", "hybrid", "--templates", "midpoint",
+                                      "--cell-template", "kuhn"])
+    for option in ["--templates", "--cell-template"]:
+        check("stmesh: warning: %s applies to simplicial output only; ignored with --elements "
+              "hybrid" % option in err, "no warning that %s is ignored" % option)
+    check(same == mesh, "--templates or --cell-template changed the hybrid mesh")
+    # A 2D image: quads and triangles, the quads' area share.
+    flat = c.make_image("slice.vti", variant="2d")
+    summary, tessellate, mesh, _ = tessellate_run(c, flat, "flat", ["--elements", "hybrid"])
+    check(sorted(tessellate["cells_by_type"]) == ["quad", "triangle"],
+          "2D hybrid cells %s" % tessellate["cells_by_type"])
+    check(0 < tessellate["hexahedron_volume_fraction"] < 1,
+          "2D quad area fraction %r" % tessellate["hexahedron_volume_fraction"])
+    check_volume_equals_voxels(mesh, voxel_volumes(flat=True), "2D hybrid")
+
+
+def case_option_elements_leaves(c):
+    image, voxels = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    tree, _ = mesh_run(c, image, "tree", [], stop_after="balance")
+    body_leaves = {m: n for m, n in tree["leaves_per_material"].items() if m != "0"}
+    summary, tessellate, mesh, _ = tessellate_run(c, image, "leaves", ["--elements", "leaves"])
+    check(tessellate["cells_by_type"] == {"hexahedron": sum(body_leaves.values())},
+          "%s, expected one hexahedron per body leaf (%d)" % (tessellate["cells_by_type"],
+                                                              sum(body_leaves.values())))
+    check(summary["cells_per_material"] == body_leaves,
+          "hexahedra per material %s, body leaves %s" % (summary["cells_per_material"],
+                                                         body_leaves))
+    check(tessellate["inserted_points"] == 0, "leaves output inserted points")
+    check(tessellate["hexahedron_volume_fraction"] == 1, "hexahedron volume fraction %r" %
+          tessellate["hexahedron_volume_fraction"])
+    check_volume_equals_voxels(mesh, voxels, "leaves")
+    # Hanging nodes: the balanced tree has leaves of different sizes side by side.
+    check(mesh["hanging"] is not None, "no point array HangingNode")
+    check(set(mesh["hanging"]) == {0, 1}, "HangingNode values %s" % sorted(set(mesh["hanging"])))
+    # A uniform tree has none.
+    boxes, box_voxels = write_label_image(c, "boxes.vti", (12, 10, 8), two_boxes)
+    _, tessellate, mesh, _ = tessellate_run(c, boxes, "uniform",
+                                            ["--elements", "leaves", "--max-cell-size", "1"])
+    check(tessellate["cells_by_type"] == {"hexahedron": 252}, "uniform leaves %s" %
+          tessellate["cells_by_type"])
+    check(mesh["hanging"] is not None and set(mesh["hanging"]) == {0},
+          "hanging nodes in a uniform tree")
+    check_volume_equals_voxels(mesh, box_voxels, "uniform leaves")
+
+
+def case_option_templates(c):
+    image, voxels = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    corners = spacetree_corners(c, image)
+    inserted = {}
+    for rule in ["midpoint", "regular", "extended"]:
+        summary, tessellate, mesh, _ = tessellate_run(c, image, rule, ["--templates", rule])
+        check_inserted_points(tessellate, mesh, corners, rule)
+        check(summary["parameters"]["templates"] == rule, "bad templates parameter")
+        check(list(tessellate["cells_by_type"]) == ["tetra"], "%s: cells %s" %
+              (rule, tessellate["cells_by_type"]))
+        check_volume_equals_voxels(mesh, voxels, rule)
+        inserted[rule] = tessellate["inserted_points"]
+    check(inserted["extended"] < inserted["regular"] < inserted["midpoint"],
+          "inserted points: extended %(extended)d, regular %(regular)d, midpoint %(midpoint)d; "
+          "expected decreasing" % inserted)
+    # regular is the default.
+    _, default, _, _ = tessellate_run(c, image, "default", [])
+    check(default["inserted_points"] == inserted["regular"], "regular is not the default")
+
+
+def case_option_boundary_layer(c):
+    image, voxels = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    background = {}
+    for elements in ["simplicial", "hybrid", "leaves"]:
+        runs = {}
+        for layers in [0, 1, 2]:
+            name = "%s_%d" % (elements, layers)
+            summary, _, mesh, _ = tessellate_run(
+                c, image, name, ["--elements", elements, "--boundary-layer=%d" % layers])
+            check(summary["parameters"]["boundary_layers"] == layers,
+                  "%s: boundary_layers %s" % (name, summary["parameters"]["boundary_layers"]))
+            check_volume_equals_voxels(mesh, voxels, name)
+            runs[layers] = mesh
+        materials = [count_by_material(runs[layers]) for layers in [0, 1, 2]]
+        check("0" not in materials[0], "%s: background cells without --boundary-layer" % elements)
+        check(0 < materials[1].get("0", 0) < materials[2].get("0", 0),
+              "%s: background cells %s with 1 and 2 layers" %
+              (elements, [m.get("0") for m in materials]))
+        # The body's cells do not change; the layers only add background cells.
+        for layers in [1, 2]:
+            body = {m: n for m, n in materials[layers].items() if m != "0"}
+            check(body == materials[0], "%s: %d layers change the body's cells" %
+                  (elements, layers))
+        background[elements] = volume_by_material(runs[1])["0"]
+    # One layer is the same region of background leaves in every output type.
+    check(abs(background["hybrid"] - background["simplicial"]) <= 1e-9 * background["simplicial"]
+          and abs(background["leaves"] - background["simplicial"]) <=
+          1e-9 * background["simplicial"],
+          "the first background layer measures %s" % background)
+    _, _, wide, _ = tessellate_run(c, image, "wide", ["--boundary-layer", "100"])
+    check(count_by_material(wide).get("0", 0) > 0, "--boundary-layer 100 adds no cells")
+
+
+def case_error_tessellate_option_values(c):
+    image, _ = write_label_image(c, "boxes.vti", (12, 10, 8), two_boxes)
+    output = c.path("out.vtu")
+    for arguments, text in [
+            (["--elements", "foo"], "--elements: 'foo' is not one of simplicial, hybrid, leaves"),
+            (["--elements", "Hybrid"],
+             "--elements: 'Hybrid' is not one of simplicial, hybrid, leaves"),
+            (["--elements", ""], "--elements: '' is not one of simplicial, hybrid, leaves"),
+            (["--elements=tetra"], "--elements: 'tetra' is not one of simplicial, hybrid, leaves"),
+            (["--elements", "hybrid", "--elements", "leaves"], "--elements given more than once"),
+            (["--elements"], "--elements needs a value"),
+            (["--templates", "x"], "--templates: 'x' is not one of midpoint, regular, extended"),
+            (["--cell-template", "y"], "--cell-template: 'y' is not one of checkerboard, kuhn"),
+            (["--boundary-layer", "-1"], "--boundary-layer: -1 is out of range (0 to 100)"),
+            (["--boundary-layer", "101"], "--boundary-layer: 101 is out of range (0 to 100)"),
+            (["--boundary-layer=101"], "--boundary-layer: 101 is out of range (0 to 100)"),
+            (["--boundary-layer", "1.5"], "--boundary-layer: '1.5' is not an integer"),
+            (["--boundary-layer", ""], "--boundary-layer needs an integer value"),
+            (["--boundary-layers", "1"], "unknown option '--boundary-layers'")]:
+        err = c.run_failing([image, "-o", output] + arguments, 2, text, output=output)
+        error_lines = [line for line in err.splitlines() if line.startswith(ERROR_PREFIX)]
+        check(len(error_lines) == 1 and error_lines[0].startswith(ERROR_PREFIX + " " + text),
+              "expected one error line starting with %r, got %s" % (text, error_lines))
+        check("--help" in err, "usage errors should point to --help")
 
 
 def main():

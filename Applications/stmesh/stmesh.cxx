@@ -3,8 +3,9 @@
  * stmesh: the command-line front end of SpacetreeMesh.
  *
  * Reads a segmented (label) image, runs stmImageToSpacetree, stmSpacetreeBalance and
- * stmSpacetreeTessellate, and writes the result as a .vtu or legacy .vtk file, printing a
- * per-stage table of wall time, output size and peak memory. Run `stmesh --help` for the usage.
+ * stmSpacetreeTessellate (tetrahedra, a hybrid mesh or the leaf cells), and writes the result as
+ * a .vtu or legacy .vtk file, printing a per-stage table of wall time, output size and peak
+ * memory. Run `stmesh --help` for the usage.
  *
  * Error policy: every failure (bad command line, unreadable or corrupt input, filter error,
  * write error) ends with messages on stderr that start with "stmesh: error:" and exit code 2 for
@@ -22,10 +23,12 @@
 #include "vtkAlgorithm.h"
 #include "vtkBox.h"
 #include "vtkCallbackCommand.h"
+#include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkCommand.h"
 #include "vtkCylinder.h"
 #include "vtkDataArray.h"
+#include "vtkDoubleArray.h"
 #include "vtkExecutive.h"
 #include "vtkFieldData.h"
 #include "vtkIdList.h"
@@ -46,6 +49,7 @@
 #include "vtkSmartPointer.h"
 #include "vtkSphere.h"
 #include "vtkType.h"
+#include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkUnstructuredGridWriter.h"
 #include "vtkVariant.h"
@@ -94,6 +98,7 @@ const int MaxMaxCellSize = 1 << 20; // stmImageToSpacetree clamps to this
 const int DefaultBalanceLevel = 1;
 const int MaxBalanceLevel = 20; // stmSpacetreeBalance clamps to this
 const int MaxThreads = 4096;
+const int MaxBoundaryLayers = 100; // stmSpacetreeTessellate clamps to this
 const int MaxSplitCount = 8;       // stmImageToSpacetree's largest split count per axis
 const double MinimumGrading = 1.5; // stmImageToSpacetree's smallest grading
 
@@ -102,13 +107,16 @@ const char* const UsageText =
               [--pattern P] [--root-cell-size X,Y,Z] [--max-cell-size-label L:S,...]
               [--refine-region REGION:SIZE] [--grading G] [--sizing-array NAME]
               [--balance-label L:LEVEL,...] [--balance-region REGION:LEVEL]
+              [--elements simplicial|hybrid|leaves] [--templates midpoint|regular|extended]
+              [--cell-template checkerboard|kuhn] [--boundary-layer N]
               [--stop-after spacetree|balance|tessellate] [--threads N] [--summary FILE.json]
               [--compressor lz4|zlib|none]
        stmesh -h|--help
        stmesh --version
 
 Mesh a segmented (label) image with SpacetreeMesh: build the spacetree of the labels, balance
-it, and tessellate it into a conforming tetrahedral mesh with a cell array "Material".
+it, and tessellate it into a conforming tetrahedral (or hybrid) mesh, or output its leaf cells,
+with a cell array "Material".
 
 Arguments:
   INPUT                 label image: .nii, .nii.gz (NIfTI), .mha, .mhd (MetaImage), .nrrd, .nhdr
@@ -153,10 +161,29 @@ Arguments:
                         balance level, 1 to 20, of the leaves whose centre is in REGION (the
                         same REGION syntax as --refine-region; a slab of width W is the band
                         around its plane), overriding --balance and --balance-label.
+  --elements E          the cells of the output: simplicial (the default: conforming
+                        tetrahedra, triangles in 2D), hybrid (conforming hexahedra, pyramids
+                        and tetrahedra; quads and triangles in 2D) or leaves (the leaf cells as
+                        hexahedra or quads, with hanging nodes marked by the point array
+                        "HangingNode").
+  --templates T         how simplicial output triangulates the leaves and their faces: midpoint
+                        (the centre of every face joined to its facets), regular (the default:
+                        faces without extra vertices on their boundary take the cell template)
+                        or extended (in addition, faces that can be cones from one of their
+                        corners become that cone, without a new point). Only for simplicial
+                        output; ignored, with a warning, with --elements hybrid or leaves.
+  --cell-template C     the template of cubes (squares) without extra vertices: checkerboard
+                        (the default: 5 tetrahedra per cube, alternating) or kuhn (the 6
+                        tetrahedra around the main diagonal). Only for simplicial output, like
+                        --templates.
+  --boundary-layer N    also output N layers of background leaves around the body (Material 0,
+                        the background label), 0 to 100. Default 0.
   --stop-after STAGE    write the output of spacetree, balance or tessellate (the default).
   --threads N           number of threads, 1 to 4096. Default: all cores, or VTK_SMP_MAX_THREADS.
                         The STDThread backend is used unless VTK_SMP_BACKEND_IN_USE is set.
-  --summary FILE.json   also write the per-stage figures, the spacetree's cell size per level
+  --summary FILE.json   also write the per-stage figures (for tessellate also the inserted
+                        points, the cells per type and, for hybrid and leaves output, the
+                        volume fraction of the hexahedra), the spacetree's cell size per level
                         (in voxels) and the per-material counts as JSON.
   --compressor C        compression of .vtu files: lz4 (the default, fastest), zlib (files
                         about 2.3 times smaller, written about 1 s slower per 5 million
@@ -342,6 +369,52 @@ const char* StopStageName(StopStage stage)
   return "?";
 }
 
+/// A keyword of --elements, --templates or --cell-template and the stmSpacetreeTessellate
+/// constant it stands for.
+struct NamedValue
+{
+  const char* Name;
+  int Value;
+};
+
+const NamedValue ElementKinds[] = { { "simplicial", stmSpacetreeTessellate::SIMPLICIAL },
+  { "hybrid", stmSpacetreeTessellate::HYBRID }, { "leaves", stmSpacetreeTessellate::LEAVES } };
+const NamedValue TemplateRules[] = { { "midpoint", stmSpacetreeTessellate::MIDPOINT_EVERYWHERE },
+  { "regular", stmSpacetreeTessellate::REGULAR_FACES },
+  { "extended", stmSpacetreeTessellate::EXTENDED } };
+const NamedValue CellTemplates[] = { { "checkerboard", stmSpacetreeTessellate::CHECKERBOARD },
+  { "kuhn", stmSpacetreeTessellate::KUHN } };
+
+/// The value of a keyword option (--elements, --templates, --cell-template), by its name.
+template <std::size_t N>
+int ParseKeyword(const std::string& text, const std::string& what, const NamedValue (&choices)[N])
+{
+  std::string names;
+  for (const NamedValue& choice : choices)
+  {
+    if (text == choice.Name)
+    {
+      return choice.Value;
+    }
+    names += std::string(names.empty() ? "" : ", ") + choice.Name;
+  }
+  throw UsageError(what + ": '" + text + "' is not one of " + names);
+}
+
+/// The name of a keyword option's value, for the summary.
+template <std::size_t N>
+const char* KeywordName(int value, const NamedValue (&choices)[N])
+{
+  for (const NamedValue& choice : choices)
+  {
+    if (choice.Value == value)
+    {
+      return choice.Name;
+    }
+  }
+  return "?";
+}
+
 /// A region of --refine-region or --balance-region: an implicit function in physical coordinates
 /// and the size (or balance level) that applies inside it.
 struct RegionOption
@@ -362,7 +435,12 @@ struct Options
   int MaxCellSize = DefaultMaxCellSize;
   int BalanceLevel = DefaultBalanceLevel; // 0: no balancing
   StopStage StopAfter = StopStage::Tessellate;
-  int Threads = 0; // 0: not given on the command line
+  int Elements = stmSpacetreeTessellate::SIMPLICIAL;        // --elements: the OutputType
+  int TemplateRule = stmSpacetreeTessellate::REGULAR_FACES; // --templates
+  int CellTemplate = stmSpacetreeTessellate::CHECKERBOARD;  // --cell-template
+  int BoundaryLayers = 0;                                   // --boundary-layer
+  std::vector<std::string> SimplicialOnlyOptions;           // --templates, --cell-template if given
+  int Threads = 0;                                          // 0: not given on the command line
   std::string SummaryPath;
   std::string Compressor = "lz4"; // of .vtu files: lz4, zlib or none
   std::string Pattern = "auto";   // normalised: lower case, no blanks
@@ -782,7 +860,8 @@ Options ParseCommandLine(int argc, char* argv[])
     static const std::set<std::string> valueOptions = { "-o", "--labels", "--max-cell-size",
       "--balance", "--stop-after", "--threads", "--summary", "--compressor", "--pattern",
       "--root-cell-size", "--max-cell-size-label", "--refine-region", "--grading", "--sizing-array",
-      "--balance-label", "--balance-region" };
+      "--balance-label", "--balance-region", "--elements", "--templates", "--cell-template",
+      "--boundary-layer" };
     if (valueOptions.count(name) == 0)
     {
       throw UsageError("unknown option '" + name + "'");
@@ -839,6 +918,24 @@ Options ParseCommandLine(int argc, char* argv[])
         throw UsageError(
           "--stop-after: '" + value + "' is not one of spacetree, balance, tessellate");
       }
+    }
+    else if (name == "--elements")
+    {
+      options.Elements = ParseKeyword(value, name, ElementKinds);
+    }
+    else if (name == "--templates")
+    {
+      options.TemplateRule = ParseKeyword(value, name, TemplateRules);
+      options.SimplicialOnlyOptions.push_back(name);
+    }
+    else if (name == "--cell-template")
+    {
+      options.CellTemplate = ParseKeyword(value, name, CellTemplates);
+      options.SimplicialOnlyOptions.push_back(name);
+    }
+    else if (name == "--boundary-layer")
+    {
+      options.BoundaryLayers = static_cast<int>(ParseInteger(value, name, 0, MaxBoundaryLayers));
     }
     else if (name == "--compressor")
     {
@@ -1236,6 +1333,14 @@ struct StageReport
   long long FileBytes = -1;
   double PeakRssMiB = 0.0;
   std::string Description; // the table's "output" column
+  // The tessellate stage only (Tessellation true): the points stmSpacetreeTessellate added to the
+  // leaf corners, the cells per type name, and for hybrid and leaves output the share of the
+  // mesh volume (area in 2D) in hexahedra (quads); -1 where not computed.
+  bool Tessellation = false;
+  long long InsertedPoints = -1;
+  std::vector<std::pair<std::string, long long>> CellsByType;
+  double HexahedronVolumeFraction = -1.0;
+  bool TwoDimensional = false; // triangles and quads
 };
 
 double PeakRssMiB()
@@ -1874,17 +1979,192 @@ std::map<long long, long long> CountCellsPerMaterial(vtkUnstructuredGrid* grid)
 }
 
 /// The JSON key of the per-material counts names what is counted.
-std::string MaterialCountKey(vtkUnstructuredGrid* grid, StopStage stopAfter)
+std::string MaterialCountKey(vtkUnstructuredGrid* grid, const Options& options)
 {
-  if (stopAfter != StopStage::Tessellate)
+  if (options.StopAfter != StopStage::Tessellate)
   {
     return "leaves_per_material";
+  }
+  if (options.Elements != stmSpacetreeTessellate::SIMPLICIAL)
+  {
+    return "cells_per_material"; // hybrid: several cell types; leaves: not the spacetree's
   }
   if (grid->GetNumberOfCells() > 0 && grid->GetCellType(0) == VTK_TRIANGLE)
   {
     return "triangles_per_material"; // a 2D image
   }
   return "tetrahedra_per_material";
+}
+
+//------------------------------------------------------------------------------------------------
+// Tessellation statistics: cells per type and the volume share of the hexahedra (quads).
+
+/// The names of the summary's cells_by_type, in this order; other types (none expected) by their
+/// VTK type number.
+const std::pair<int, const char*> CellTypeNames[] = { { VTK_TETRA, "tetra" },
+  { VTK_PYRAMID, "pyramid" }, { VTK_HEXAHEDRON, "hexahedron" }, { VTK_TRIANGLE, "triangle" },
+  { VTK_QUAD, "quad" } };
+
+std::vector<std::pair<std::string, long long>> CountCellsByType(vtkUnstructuredGrid* grid)
+{
+  long long counts[256] = {};
+  if (vtkUnsignedCharArray* types = grid->GetCellTypesArray())
+  {
+    const unsigned char* values = types->GetPointer(0);
+    const vtkIdType count = types->GetNumberOfValues();
+    for (vtkIdType cell = 0; cell < count; ++cell)
+    {
+      ++counts[values[cell]];
+    }
+  }
+  std::vector<std::pair<std::string, long long>> present;
+  for (const auto& entry : CellTypeNames)
+  {
+    if (counts[entry.first] > 0)
+    {
+      present.emplace_back(entry.second, counts[entry.first]);
+      counts[entry.first] = 0;
+    }
+  }
+  for (int type = 0; type < 256; ++type)
+  {
+    if (counts[type] > 0)
+    {
+      present.emplace_back("type_" + std::to_string(type), counts[type]);
+    }
+  }
+  return present;
+}
+
+/// The measure (volume, or area of a 2D cell) of a tessellation cell given by its point ids in
+/// VTK order. Every cell of the tessellation is the affine image of a lattice cell: hexahedra and
+/// quads are parallelepipeds and parallelograms, pyramids have a parallelogram base, so the
+/// measure follows from point 0 and its neighbours along the cell's edges, exactly.
+template <class IdType, class PointFunction>
+double CellMeasure(int type, const IdType* ids, const PointFunction& point)
+{
+  // Point 0 and its neighbours: 1 and 2 of a triangle or tetrahedron, 1 and the last base corner
+  // (3) of a quad, pyramid or hexahedron, and the third edge (3 of a tetrahedron, 4 else).
+  const bool simplex = type == VTK_TRIANGLE || type == VTK_TETRA;
+  const bool solid = type == VTK_TETRA || type == VTK_PYRAMID || type == VTK_HEXAHEDRON;
+  double p[4][3];
+  point(ids[0], p[0]);
+  point(ids[1], p[1]);
+  point(ids[simplex ? 2 : 3], p[2]);
+  if (solid)
+  {
+    point(ids[type == VTK_TETRA ? 3 : 4], p[3]);
+  }
+  double a[3], b[3], c[3];
+  for (int k = 0; k < 3; ++k)
+  {
+    a[k] = p[1][k] - p[0][k];
+    b[k] = p[2][k] - p[0][k];
+    c[k] = solid ? p[3][k] - p[0][k] : 0.0;
+  }
+  const double cross[3] = { a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+    a[0] * b[1] - a[1] * b[0] };
+  switch (type)
+  {
+    case VTK_TRIANGLE:
+      return 0.5 * std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+    case VTK_QUAD:
+      return std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+    case VTK_TETRA:
+      return std::abs(cross[0] * c[0] + cross[1] * c[1] + cross[2] * c[2]) / 6.0;
+    case VTK_PYRAMID:
+      return std::abs(cross[0] * c[0] + cross[1] * c[1] + cross[2] * c[2]) / 3.0;
+    case VTK_HEXAHEDRON:
+      return std::abs(cross[0] * c[0] + cross[1] * c[1] + cross[2] * c[2]);
+    default:
+      return 0.0;
+  }
+}
+
+/// Sums the measures of all cells and of the hexahedra and quads, in parallel over fixed blocks
+/// of cells that are added up in order, so that the result does not depend on the threads.
+template <class IdType, class PointFunction>
+void SumMeasures(const IdType* offsets, const IdType* connectivity, const unsigned char* types,
+  vtkIdType cells, const PointFunction& point, double& total, double& boxes)
+{
+  const vtkIdType blockSize = 1 << 16;
+  const vtkIdType blocks = (cells + blockSize - 1) / blockSize;
+  std::vector<double> blockTotals(static_cast<std::size_t>(blocks), 0.0);
+  std::vector<double> blockBoxes(static_cast<std::size_t>(blocks), 0.0);
+  vtkSMPTools::For(0, blocks,
+    [&](vtkIdType beginBlock, vtkIdType endBlock)
+    {
+      for (vtkIdType block = beginBlock; block < endBlock; ++block)
+      {
+        double blockTotal = 0.0;
+        double blockBox = 0.0;
+        const vtkIdType end = std::min(cells, (block + 1) * blockSize);
+        for (vtkIdType cell = block * blockSize; cell < end; ++cell)
+        {
+          const int type = types[cell];
+          if (offsets[cell + 1] - offsets[cell] < 3)
+          {
+            continue;
+          }
+          const double measure = CellMeasure(type, connectivity + offsets[cell], point);
+          blockTotal += measure;
+          if (type == VTK_HEXAHEDRON || type == VTK_QUAD)
+          {
+            blockBox += measure;
+          }
+        }
+        blockTotals[block] = blockTotal;
+        blockBoxes[block] = blockBox;
+      }
+    });
+  total = 0.0;
+  boxes = 0.0;
+  for (vtkIdType block = 0; block < blocks; ++block)
+  {
+    total += blockTotals[block];
+    boxes += blockBoxes[block];
+  }
+}
+
+/// The share of the mesh volume (area of a 2D mesh) in hexahedra (quads).
+double HexahedronVolumeFraction(vtkUnstructuredGrid* grid)
+{
+  vtkPoints* points = grid->GetPoints();
+  vtkCellArray* cellArray = grid->GetCells();
+  vtkUnsignedCharArray* typeArray = grid->GetCellTypesArray();
+  const vtkIdType cells = grid->GetNumberOfCells();
+  if (!points || !cellArray || !typeArray || cells == 0)
+  {
+    return 0.0;
+  }
+  const unsigned char* types = typeArray->GetPointer(0);
+  // stmSpacetreeTessellate writes double points; read others through vtkPoints.
+  vtkDoubleArray* doubles = vtkDoubleArray::FastDownCast(points->GetData());
+  const double* xyz = doubles ? doubles->GetPointer(0) : nullptr;
+  const auto point = [xyz, points](vtkIdType id, double p[3])
+  {
+    if (xyz)
+    {
+      std::copy(xyz + 3 * id, xyz + 3 * id + 3, p);
+    }
+    else
+    {
+      points->GetPoint(id, p);
+    }
+  };
+  double total = 0.0;
+  double boxes = 0.0;
+  if (cellArray->IsStorage64Bit())
+  {
+    SumMeasures(cellArray->GetOffsetsArray64()->GetPointer(0),
+      cellArray->GetConnectivityArray64()->GetPointer(0), types, cells, point, total, boxes);
+  }
+  else
+  {
+    SumMeasures(cellArray->GetOffsetsArray32()->GetPointer(0),
+      cellArray->GetConnectivityArray32()->GetPointer(0), types, cells, point, total, boxes);
+  }
+  return total > 0 ? boxes / total : 0.0;
 }
 
 //------------------------------------------------------------------------------------------------
@@ -1913,6 +2193,30 @@ void PrintTable(const std::vector<StageReport>& stages, double totalSeconds)
   std::snprintf(
     line, sizeof(line), "%-11s %9.3f  %-38s %12.1f\n", "total", totalSeconds, "", PeakRssMiB());
   std::cout << line;
+  // The tessellation's figures below the table: cells per type, inserted points, and the
+  // volume share of the hexahedra.
+  for (const StageReport& stage : stages)
+  {
+    if (!stage.Tessellation || stage.Skipped)
+    {
+      continue;
+    }
+    std::cout << stage.Name << ":";
+    const char* separator = " ";
+    for (const auto& entry : stage.CellsByType)
+    {
+      std::cout << separator << entry.second << ' ' << entry.first;
+      separator = ", ";
+    }
+    std::cout << "; " << stage.InsertedPoints << " inserted points";
+    if (stage.HexahedronVolumeFraction >= 0)
+    {
+      std::cout << "; " << (stage.TwoDimensional ? "quad area" : "hexahedron volume")
+                << " fraction " << std::fixed << std::setprecision(4)
+                << stage.HexahedronVolumeFraction << std::defaultfloat;
+    }
+    std::cout << '\n';
+  }
   std::cout.flush();
 }
 
@@ -2046,6 +2350,10 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
        << ", \"max_cell_size\": " << options.MaxCellSize
        << ", \"balance\": " << options.BalanceLevel
        << ", \"stop_after\": " << JsonString(StopStageName(options.StopAfter))
+       << ", \"elements\": " << JsonString(KeywordName(options.Elements, ElementKinds))
+       << ", \"templates\": " << JsonString(KeywordName(options.TemplateRule, TemplateRules))
+       << ", \"cell_template\": " << JsonString(KeywordName(options.CellTemplate, CellTemplates))
+       << ", \"boundary_layers\": " << options.BoundaryLayers
        << ", \"compressor\": " << JsonString(options.Compressor)
        << ", \"pattern\": " << JsonString(options.Pattern) << ", \"root_cell_size\": "
        << (options.RootCellSize.empty() ? "null" : JsonList(options.RootCellSize))
@@ -2095,8 +2403,23 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
          << ", \"cells\": " << JsonCount(stage.Cells) << ", \"points\": " << JsonCount(stage.Points)
          << ", \"leaves\": " << JsonCount(stage.Leaves)
          << ", \"file_bytes\": " << JsonCount(stage.FileBytes)
-         << ", \"peak_rss_mib\": " << std::setprecision(3) << stage.PeakRssMiB << "}"
-         << (i + 1 < summary.Stages.size() ? "," : "") << "\n";
+         << ", \"peak_rss_mib\": " << std::setprecision(3) << stage.PeakRssMiB;
+    if (stage.Tessellation)
+    {
+      json << ", \"inserted_points\": " << JsonCount(stage.InsertedPoints)
+           << ", \"cells_by_type\": {";
+      for (std::size_t t = 0; t < stage.CellsByType.size(); ++t)
+      {
+        json << (t ? ", " : "") << JsonString(stage.CellsByType[t].first) << ": "
+             << stage.CellsByType[t].second;
+      }
+      json << "}";
+      if (stage.HexahedronVolumeFraction >= 0)
+      {
+        json << ", \"hexahedron_volume_fraction\": " << JsonNumber(stage.HexahedronVolumeFraction);
+      }
+    }
+    json << "}" << (i + 1 < summary.Stages.size() ? "," : "") << "\n";
   }
   json << "  ],\n";
   json << "  \"total_seconds\": " << std::setprecision(6) << summary.TotalSeconds << ",\n";
@@ -2234,7 +2557,32 @@ int Run(const Options& options)
     StageReport tessellateReport;
     tessellateReport.Name = "tessellate";
     vtkNew<stmSpacetreeTessellate> tessellate;
+    tessellate->SetOutputType(options.Elements);
+    tessellate->SetTemplateRule(options.TemplateRule);
+    tessellate->SetCellTemplate(options.CellTemplate);
+    tessellate->SetBoundaryLayers(options.BoundaryLayers);
+    if (options.Elements != stmSpacetreeTessellate::SIMPLICIAL)
+    {
+      for (const std::string& name : options.SimplicialOnlyOptions)
+      {
+        Diagnostics() << "stmesh: warning: " << name
+                      << " applies to simplicial output only; ignored with --elements "
+                      << KeywordName(options.Elements, ElementKinds) << '\n';
+      }
+    }
     grid = RunStage(tessellate, grid, "tessellating the spacetree", tessellateReport, false);
+    tessellateReport.Tessellation = true;
+    tessellateReport.InsertedPoints =
+      static_cast<long long>(tessellate->GetNumberOfInsertedPoints());
+    tessellateReport.CellsByType = CountCellsByType(grid);
+    tessellateReport.TwoDimensional =
+      std::any_of(tessellateReport.CellsByType.begin(), tessellateReport.CellsByType.end(),
+        [](const std::pair<std::string, long long>& entry)
+        { return entry.first == "triangle" || entry.first == "quad"; });
+    if (options.Elements != stmSpacetreeTessellate::SIMPLICIAL)
+    {
+      tessellateReport.HexahedronVolumeFraction = HexahedronVolumeFraction(grid);
+    }
     summary.Stages.push_back(tessellateReport);
   }
 
@@ -2244,7 +2592,7 @@ int Run(const Options& options)
   summary.Stages.push_back(writeReport);
   summary.TotalSeconds = SecondsSince(start);
 
-  summary.MaterialKey = MaterialCountKey(grid, options.StopAfter);
+  summary.MaterialKey = MaterialCountKey(grid, options);
   summary.CellsPerMaterial = CountCellsPerMaterial(grid);
 
   PrintTable(summary.Stages, summary.TotalSeconds);

@@ -15,6 +15,7 @@
 #include "vtkIntArray.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
+#include "vtkPointData.h"
 #include "vtkPoints.h"
 #include "vtkSMPTools.h"
 #include "vtkTypeInt32Array.h"
@@ -28,39 +29,121 @@ vtkStandardNewMacro(stmSpacetreeTessellate);
 
 namespace
 {
+/// VTK's point order of the cells of shape j (see stm::CellPointCount): the cube corners in
+/// cyclic order, the apex of a pyramid last.
+template <int Dim>
+void ToVTKOrder(std::uint8_t shape, vtkIdType* ids)
+{
+  if (shape < 2)
+  {
+    return; // simplices: VTK takes the stored order
+  }
+  vtkIdType* corners = ids + (Dim - shape);
+  if (shape == Dim - 1)
+  {
+    // Pyramid: the base first, then the apex.
+    const vtkIdType apex = ids[0];
+    std::copy(corners, corners + 4, ids);
+    ids[4] = apex;
+    corners = ids;
+  }
+  for (int first = 0; first < (1 << shape); first += 4)
+  {
+    std::swap(corners[first + 2], corners[first + 3]);
+  }
+}
+
+/// Mirrors a 3D cell in VTK order: its orientation flips.
+void MirrorVTKCell(unsigned char type, vtkIdType* ids)
+{
+  switch (type)
+  {
+    case VTK_TETRA:
+      std::swap(ids[0], ids[1]);
+      break;
+    case VTK_PYRAMID:
+      std::swap(ids[1], ids[3]);
+      break;
+    case VTK_HEXAHEDRON:
+      std::swap(ids[1], ids[3]);
+      std::swap(ids[5], ids[7]);
+      break;
+    default:
+      break;
+  }
+}
+
+template <int Dim>
+unsigned char CellTypeOfShape(std::uint8_t shape)
+{
+  if (Dim == 3)
+  {
+    return shape == 1 ? VTK_TETRA : shape == 2 ? VTK_PYRAMID : VTK_HEXAHEDRON;
+  }
+  return shape == 1 ? VTK_TRIANGLE : VTK_QUAD;
+}
+
 /// Fills the connectivity straight into a vtkCellArray of the given storage type.
 template <class StorageArray, class IdType, int Dim>
 vtkSmartPointer<vtkCellArray> WriteCells(stm::SpacetreeTessellator<Dim>& tessellator,
-  std::vector<stm::MaterialIndex>& materialIndices, bool mirrored, stmSMPExecutor& executor)
+  std::vector<stm::MaterialIndex>& materialIndices, std::vector<std::uint8_t>& shapes,
+  bool mirrored, stmSMPExecutor& executor)
 {
-  const std::int64_t cells = tessellator.GetNumberOfSimplices();
+  const std::int64_t cells = tessellator.GetNumberOfCells();
+  const bool simplicial = tessellator.IsSimplicial();
   vtkNew<StorageArray> offsets;
   vtkNew<StorageArray> connectivity;
   offsets->SetNumberOfValues(cells + 1);
-  connectivity->SetNumberOfValues(cells * (Dim + 1));
-  IdType* offsetValues = offsets->GetPointer(0);
-  vtkSMPTools::For(0, cells + 1,
-    [&](vtkIdType begin, vtkIdType end)
-    {
-      for (vtkIdType i = begin; i < end; ++i)
-      {
-        offsetValues[i] = static_cast<IdType>(i * (Dim + 1));
-      }
-    });
+  connectivity->SetNumberOfValues(tessellator.GetConnectivitySize());
   IdType* ids = connectivity->GetPointer(0);
-  if (!tessellator.WriteSimplices(ids, materialIndices.data(), executor).IsOk())
+  shapes.assign(simplicial ? 0 : static_cast<std::size_t>(cells), 1);
+  if (!tessellator
+         .WriteCells(ids, simplicial ? nullptr : shapes.data(), materialIndices.data(), executor)
+         .IsOk())
   {
     return nullptr;
   }
-  if (mirrored)
+  IdType* offsetValues = offsets->GetPointer(0);
+  if (simplicial)
   {
-    // The core orients in lattice coordinates; a mirroring image direction flips every cell.
+    vtkSMPTools::For(0, cells + 1,
+      [&](vtkIdType begin, vtkIdType end)
+      {
+        for (vtkIdType i = begin; i < end; ++i)
+        {
+          offsetValues[i] = static_cast<IdType>(i * (Dim + 1));
+        }
+      });
+  }
+  else
+  {
+    IdType offset = 0;
+    for (std::int64_t c = 0; c < cells; ++c)
+    {
+      offsetValues[c] = offset;
+      offset += static_cast<IdType>(stm::CellPointCount(Dim, shapes[c]));
+    }
+    offsetValues[cells] = offset;
+  }
+  if (!simplicial || mirrored)
+  {
+    // The core orders cube corners by code and orients in lattice coordinates; VTK orders
+    // them cyclically, and a mirroring image direction flips every cell.
     vtkSMPTools::For(0, cells,
       [&](vtkIdType begin, vtkIdType end)
       {
         for (vtkIdType c = begin; c < end; ++c)
         {
-          std::swap(ids[c * (Dim + 1)], ids[c * (Dim + 1) + 1]);
+          const std::uint8_t shape = simplicial ? 1 : shapes[c];
+          vtkIdType cellIds[1 << Dim];
+          const int count = stm::CellPointCount(Dim, shape);
+          std::copy(ids + offsetValues[c], ids + offsetValues[c] + count, cellIds);
+          ToVTKOrder<Dim>(shape, cellIds);
+          if (mirrored)
+          {
+            MirrorVTKCell(CellTypeOfShape<Dim>(shape), cellIds);
+          }
+          std::copy(cellIds, cellIds + count, ids + offsetValues[c]);
         }
       });
   }
@@ -72,7 +155,7 @@ vtkSmartPointer<vtkCellArray> WriteCells(stm::SpacetreeTessellator<Dim>& tessell
 template <int Dim>
 bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry,
   const stm::SpacetreeTessellationOptions& options, stmSMPExecutor& executor,
-  vtkUnstructuredGrid* output, std::string& error)
+  vtkUnstructuredGrid* output, vtkIdType& insertedPoints, std::string& error)
 {
   stm::Spacetree<Dim> tree;
   if (!stmSpacetreeData::ReadSpacetree<Dim>(input, tree, error))
@@ -87,16 +170,30 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
     error = status.GetMessage();
     return false;
   }
-  const std::int64_t cells = tessellator.GetNumberOfSimplices();
+  const std::int64_t cells = tessellator.GetNumberOfCells();
   const std::int64_t numberOfPoints = tessellator.GetNumberOfPoints();
+  insertedPoints = tessellator.CountInsertedPoints();
 
   // Points.
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
   points->SetNumberOfPoints(numberOfPoints);
   double* xyz = vtkDoubleArray::SafeDownCast(points->GetData())->GetPointer(0);
+  vtkSmartPointer<vtkUnsignedCharArray> hangingNodes;
+  unsigned char* hanging = nullptr;
+  if (options.Output == stm::TessellationOutput::Leaves)
+  {
+    hangingNodes = vtkSmartPointer<vtkUnsignedCharArray>::New();
+    hangingNodes->SetName("HangingNode");
+    hangingNodes->SetNumberOfValues(numberOfPoints);
+    hanging = hangingNodes->GetPointer(0);
+  }
   auto place = [&](std::int64_t id, const stm::LatticeIndex<Dim>& halfUnits)
   {
+    if (hanging)
+    {
+      hanging[id] = tessellator.IsHangingNode(halfUnits) ? 1 : 0;
+    }
     double lattice[3];
     for (int axis = 0; axis < Dim; ++axis)
     {
@@ -124,13 +221,15 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
 
   // Cells, 32-bit connectivity whenever the sizes allow.
   std::vector<stm::MaterialIndex> materialIndices(static_cast<std::size_t>(cells));
-  const bool fits32 = cells * (Dim + 1) < std::numeric_limits<std::int32_t>::max() &&
+  std::vector<std::uint8_t> shapes;
+  const bool fits32 =
+    tessellator.GetConnectivitySize() < std::numeric_limits<std::int32_t>::max() &&
     numberOfPoints < std::numeric_limits<std::int32_t>::max();
   vtkSmartPointer<vtkCellArray> cellArray = fits32
     ? WriteCells<vtkTypeInt32Array, vtkTypeInt32, Dim>(
-        tessellator, materialIndices, mirrored, executor)
+        tessellator, materialIndices, shapes, mirrored, executor)
     : WriteCells<vtkTypeInt64Array, vtkTypeInt64, Dim>(
-        tessellator, materialIndices, mirrored, executor);
+        tessellator, materialIndices, shapes, mirrored, executor);
   if (!cellArray)
   {
     error = "execution aborted";
@@ -138,7 +237,22 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   }
   vtkNew<vtkUnsignedCharArray> types;
   types->SetNumberOfValues(cells);
-  types->FillValue(static_cast<unsigned char>(Dim == 3 ? VTK_TETRA : VTK_TRIANGLE));
+  if (shapes.empty())
+  {
+    types->FillValue(CellTypeOfShape<Dim>(1));
+  }
+  else
+  {
+    unsigned char* typeValues = types->GetPointer(0);
+    vtkSMPTools::For(0, cells,
+      [&](vtkIdType begin, vtkIdType end)
+      {
+        for (vtkIdType c = begin; c < end; ++c)
+        {
+          typeValues[c] = CellTypeOfShape<Dim>(shapes[c]);
+        }
+      });
+  }
 
   vtkNew<vtkIntArray> materials;
   materials->SetName("Material");
@@ -157,6 +271,10 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   output->SetCells(types, cellArray);
   output->GetCellData()->AddArray(materials);
   output->GetCellData()->SetActiveScalars("Material");
+  if (hangingNodes)
+  {
+    output->GetPointData()->AddArray(hangingNodes);
+  }
   return true;
 }
 } // namespace
@@ -167,9 +285,15 @@ stmSpacetreeTessellate::~stmSpacetreeTessellate() = default;
 void stmSpacetreeTessellate::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
+  static const char* const outputTypes[] = { "Simplicial", "Hybrid", "Leaves" };
+  static const char* const templateRules[] = { "MidpointEverywhere", "RegularFaces", "Extended" };
+  os << indent << "OutputType: " << outputTypes[this->OutputType] << "\n";
+  os << indent << "TemplateRule: " << templateRules[this->TemplateRule] << "\n";
   os << indent << "CellTemplate: " << (this->CellTemplate == CHECKERBOARD ? "Checkerboard" : "Kuhn")
      << "\n";
   os << indent << "IncludeBackground: " << (this->IncludeBackground ? "On" : "Off") << "\n";
+  os << indent << "BoundaryLayers: " << this->BoundaryLayers << "\n";
+  os << indent << "NumberOfInsertedPoints: " << this->NumberOfInsertedPoints << "\n";
 }
 
 int stmSpacetreeTessellate::RequestData(
@@ -188,10 +312,15 @@ int stmSpacetreeTessellate::RequestData(
   options.Template =
     this->CellTemplate == KUHN ? stm::CellTemplate::Kuhn : stm::CellTemplate::Checkerboard;
   options.IncludeBackground = this->IncludeBackground;
+  options.Output = static_cast<stm::TessellationOutput>(this->OutputType);
+  options.Templates = static_cast<stm::TemplateRule>(this->TemplateRule);
+  options.BoundaryLayers = this->BoundaryLayers;
   stmSMPExecutor executor(this);
+  this->NumberOfInsertedPoints = 0;
   const bool done = geometry.Dimension == 3
-    ? Tessellate<3>(input, geometry, options, executor, output, error)
-    : Tessellate<2>(input, geometry, options, executor, output, error);
+    ? Tessellate<3>(input, geometry, options, executor, output, this->NumberOfInsertedPoints, error)
+    : Tessellate<2>(
+        input, geometry, options, executor, output, this->NumberOfInsertedPoints, error);
   if (done)
   {
     // The executive passes the input's field data on; the spacetree's do not describe a mesh.

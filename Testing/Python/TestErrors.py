@@ -356,4 +356,35 @@ for algorithm, name in ((spacetreemesh.stmSpacetreeBalance(), "SpacetreeBalance"
         cases += 1
     expect_good(run, GOOD_TREE, name + " (good tree at the end)")
 
+# ------------------------------------------------------------------------------------------------
+# Out-of-range parameters of SpacetreeTessellate are clamped (vtkSetClampMacro), not errors; the
+# clamped values are used.
+clamped = spacetreemesh.stmSpacetreeTessellate()
+for setter, value, getter, expected in [
+        ("SetBoundaryLayers", -5, "GetBoundaryLayers", 0),
+        ("SetBoundaryLayers", 101, "GetBoundaryLayers", 100),
+        ("SetOutputType", 7, "GetOutputType", spacetreemesh.stmSpacetreeTessellate.LEAVES),
+        ("SetOutputType", -1, "GetOutputType", spacetreemesh.stmSpacetreeTessellate.SIMPLICIAL),
+        ("SetTemplateRule", 3, "GetTemplateRule", spacetreemesh.stmSpacetreeTessellate.EXTENDED),
+        ("SetTemplateRule", -2, "GetTemplateRule",
+         spacetreemesh.stmSpacetreeTessellate.MIDPOINT_EVERYWHERE),
+        ("SetCellTemplate", 2, "GetCellTemplate", spacetreemesh.stmSpacetreeTessellate.KUHN)]:
+    getattr(clamped, setter)(value)
+    T.check(getattr(clamped, getter)() == expected,
+            "%s(%d) gives %s() = %r, expected the clamped %d"
+            % (setter, value, getter, getattr(clamped, getter)(), expected))
+    cases += 1
+T.check(clamped.GetBoundaryLayers() == 100 and clamped.GetOutputType() == 0,
+        "the clamps do not stick")
+clamped.SetBoundaryLayers(-5)
+clamped.SetOutputType(7)
+clamp_run = Run(clamped)
+expect_good(clamp_run, GOOD_TREE, "SpacetreeTessellate with clamped BoundaryLayers and OutputType")
+leaf_cells = clamped.GetOutput()
+T.check({leaf_cells.GetCellType(i) for i in range(leaf_cells.GetNumberOfCells())} == {VTK_HEXAHEDRON},
+        "OutputType 7 (clamped to LEAVES) does not output the leaves as hexahedra")
+T.check(0 not in set(T.cell_array(leaf_cells, "Material")),
+        "BoundaryLayers -5 (clamped to 0) outputs background leaves")
+T.check(clamped.GetNumberOfInsertedPoints() == 0, "the leaves output inserted points")
+
 print("errors: %d bad inputs reported, no crash, empty outputs" % cases)

@@ -9,7 +9,9 @@ For every proxy of /work/main/Plugin/*.xml (STM_XML_DIR):
 - every DoubleVectorProperty and StringVectorProperty with command="SetX" likewise; the
   repeated (label, value) pair properties default to empty and store what their command sets;
   the implicit-function (region) properties default to no function;
-- PrintSelf (str(obj)) of each class mentions every property;
+- PrintSelf (str(obj)) of each class mentions every property, an enumeration by its entry's
+  text without blanks ("TemplateRule: RegularFaces"); a fresh stmSpacetreeTessellate prints
+  its defaults and its result NumberOfInsertedPoints (PRINTED_DEFAULTS);
 - the proxies made by ParaView from these XML files hold the same defaults and push them
   unchanged into their VTK objects.
 All mismatches are collected and reported together.
@@ -42,6 +44,14 @@ PAIR_PROPERTIES = {
 }
 # Implicit-function properties: property name -> getter.
 REGION_PROPERTIES = {"RefinementRegion": "GetRefinementRegion", "BalanceRegion": "GetBalanceRegion"}
+
+# Lines the PrintSelf of a fresh instance must contain, beyond the generic checks: the defaults
+# in words and result values that are no property.
+PRINTED_DEFAULTS = {
+    "stmSpacetreeTessellate": ["OutputType: Simplicial", "TemplateRule: RegularFaces",
+                               "CellTemplate: Checkerboard", "IncludeBackground: Off",
+                               "BoundaryLayers: 0", "NumberOfInsertedPoints: 0"],
+}
 
 problems = []
 
@@ -142,15 +152,17 @@ def check_int_property(where, prop, obj, printed):
             if defaults[0] not in values:
                 problem("%s: default %d is no enumeration entry %r" % (where, defaults[0], entries))
             for value, text in entries:
-                constant = getattr(type(obj), text.upper(), None)
+                # "Regular Faces" is REGULAR_FACES in C++ and "RegularFaces" in PrintSelf.
+                constant = getattr(type(obj), text.upper().replace(" ", "_"), None)
                 if constant is None or int(constant) != value:
                     problem("%s: entry %s=%d has no matching C++ enum constant (%r)"
                             % (where, text, value, constant))
                 setter(value)
                 if getter() != value:
                     problem("%s: %s(%d) gives %r" % (where, command, value, getter()))
-                if "%s: %s" % (name, text) not in str(obj):
-                    problem("%s: PrintSelf does not show '%s: %s'" % (where, name, text))
+                shown = text.replace(" ", "")
+                if "%s: %s\n" % (name, shown) not in str(obj):
+                    problem("%s: PrintSelf does not show '%s: %s'" % (where, name, shown))
             setter(max(values) + 1)
             if getter() != max(values):
                 problem("%s: %s(%d) is not clamped to %d" % (where, command, max(values) + 1, max(values)))
@@ -254,6 +266,12 @@ for path in xml_files:
                 continue
             fresh[proxy_name] = proxy
             printed = str(obj)
+            for line in PRINTED_DEFAULTS.get(proxy.get("class"), []):
+                if "%s%s\n" % (" " * 2, line) not in printed:
+                    problem("%s: PrintSelf of a fresh instance does not show %r" % (where, line))
+            if proxy.get("class") == "stmSpacetreeTessellate" and obj.GetNumberOfInsertedPoints() != 0:
+                problem("%s: GetNumberOfInsertedPoints() of a fresh instance is %d"
+                        % (where, obj.GetNumberOfInsertedPoints()))
             for prop in proxy:
                 if not prop.tag.endswith("Property"):
                     continue

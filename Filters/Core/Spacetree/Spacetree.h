@@ -34,6 +34,37 @@ constexpr int MaximumSupportedLevel = 20;
 /// Largest split count of one axis in one level of a refinement pattern.
 constexpr int MaximumSplitCount = 8;
 
+/// Calls visit(childAnchor) for the children (edges childSize) of a box spanning freeAxes, in
+/// lattice order.
+template <int Dim, class Visitor>
+void ForEachChildAnchor(const LatticeIndex<Dim>& anchor, const LatticeIndex<Dim>& size,
+  const LatticeIndex<Dim>& childSize, unsigned freeAxes, Visitor&& visit)
+{
+  LatticeIndex<Dim> child = anchor;
+  for (;;)
+  {
+    visit(static_cast<const LatticeIndex<Dim>&>(child));
+    int axis = 0;
+    for (; axis < Dim; ++axis)
+    {
+      if (!(freeAxes & (1u << axis)))
+      {
+        continue;
+      }
+      child[axis] += childSize[axis];
+      if (child[axis] < anchor[axis] + size[axis])
+      {
+        break;
+      }
+      child[axis] = anchor[axis];
+    }
+    if (axis == Dim)
+    {
+      return;
+    }
+  }
+}
+
 template <int Dim>
 class Spacetree
 {
@@ -119,27 +150,8 @@ public:
   static void VisitChildren(const std::vector<LatticeIndex<Dim>>& cellSizes,
     const LatticeIndex<Dim>& anchor, int level, Visitor&& visit)
   {
-    const LatticeIndex<Dim> size = cellSizes[level];
-    const LatticeIndex<Dim> childSize = cellSizes[level + 1];
-    LatticeIndex<Dim> child = anchor;
-    for (;;)
-    {
-      visit(static_cast<const LatticeIndex<Dim>&>(child));
-      int axis = 0;
-      for (; axis < Dim; ++axis)
-      {
-        child[axis] += childSize[axis];
-        if (child[axis] < anchor[axis] + size[axis])
-        {
-          break;
-        }
-        child[axis] = anchor[axis];
-      }
-      if (axis == Dim)
-      {
-        return;
-      }
-    }
+    ForEachChildAnchor<Dim>(anchor, cellSizes[level], cellSizes[level + 1], (1u << Dim) - 1u,
+      [&](const LatticeIndex<Dim>& child) { visit(child); });
   }
 
   /// Lattice cells per axis covered by the root grid.

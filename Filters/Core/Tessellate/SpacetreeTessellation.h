@@ -58,11 +58,64 @@ enum class CellTemplate
   Kuhn = 1
 };
 
+/// What the tessellation emits.
+enum class TessellationOutput
+{
+  /// Conforming simplices only.
+  Simplices = 0,
+  /// The paper's hybrid rule: a k-face is tessellated (midpoint + cone) only if one of its
+  /// facets is; every other face stays a k-cube. In 3D: hexahedra, pyramids, tetrahedra.
+  Hybrid = 1,
+  /// The leaves themselves as Dim-cubes, with hanging nodes.
+  Leaves = 2
+};
+
+/// How unsplit faces are triangulated in Simplices output.
+enum class TemplateRule
+{
+  /// The recursive midpoint rule for every face of dimension 2 or more (paper Fig. 3a).
+  MidpointEverywhere = 0,
+  /// Templates for regular faces, the midpoint rule for the others (paper section 2.4).
+  RegularFaces = 1,
+  /// In addition, irregular faces that are cones from one of their corners are triangulated as
+  /// that cone, without a new point (the paper's extended templates, Figs. 3d, 4 right, 5).
+  Extended = 2
+};
+
 struct SpacetreeTessellationOptions
 {
   CellTemplate Template = CellTemplate::Checkerboard;
+  TessellationOutput Output = TessellationOutput::Simplices;
+  TemplateRule Templates = TemplateRule::RegularFaces;
   /// Tessellate the background leaves too, not only the body of interest.
   bool IncludeBackground = false;
+  /// Layers of background leaves around the body of interest to tessellate too (each layer:
+  /// the background leaves touching the previous ones); ignored with IncludeBackground.
+  int BoundaryLayers = 0;
+};
+
+/// The cells of a k-face are polytopes P_j of the paper's equation (1), 1 <= j <= k: cones with
+/// k - j apexes over a j-cube. Their points are the apexes, outermost first, followed by the
+/// 2^j cube corners in code order (bit i: far side along the cube's i-th axis). j = 1 is a
+/// simplex, j = k the cube itself; in 3D j = 2 is a pyramid.
+constexpr int CellPointCount(int k, int shape)
+{
+  return (k - shape) + (1 << shape);
+}
+
+/// Cells (points and shapes) of a face, as appended by the tessellation.
+template <int Dim>
+struct TessellationCells
+{
+  std::vector<LatticeIndex<Dim>> Points;
+  std::vector<std::uint8_t> Shapes;
+
+  void Clear()
+  {
+    this->Points.clear();
+    this->Shapes.clear();
+  }
+  std::size_t Size() const { return this->Shapes.size(); }
 };
 
 /// Exact orientation of a simplex given by Dim+1 integer points: the sign of the determinant of
@@ -126,11 +179,201 @@ std::int64_t SimplexDeterminant(const LatticeIndex<Dim>* points)
   }
 }
 
+/// Orientation of a cell of shape j (see CellPointCount): the determinant of the simplex of
+/// cube corners 0, 1, 2, 4, ..., 2^(j-1) followed by the apexes. For a simplex it has the sign
+/// of SimplexDeterminant of the stored order; for a pyramid it is positive when the apex lies
+/// on the side the base normal of corners 0, 1, 3, 2 points to.
+template <int Dim>
+std::int64_t CellDeterminant(const LatticeIndex<Dim>* points, int shape)
+{
+  const int apexes = Dim - shape;
+  const LatticeIndex<Dim>* corners = points + apexes;
+  std::array<LatticeIndex<Dim>, Dim + 1> simplex;
+  simplex[0] = corners[0];
+  for (int i = 0; i < shape; ++i)
+  {
+    simplex[1 + i] = corners[1 << i];
+  }
+  for (int a = 0; a < apexes; ++a)
+  {
+    simplex[1 + shape + a] = points[a];
+  }
+  return SimplexDeterminant<Dim>(simplex.data());
+}
+
+/// The level tables of the tessellation, from the tree's level table: for every level and axis
+/// set, the canonical level of a face of that level spanning those axes (the finest level whose
+/// cells have the same edges along those axes); whether a cell of each level may take the cell
+/// template; whether some face needs the level map.
+template <int Dim>
+struct TessellationLevelTables
+{
+  std::vector<std::int8_t> CanonicalLevels;
+  std::vector<std::uint8_t> TemplateAllowed;
+  bool NeedsLevelMap = false;
+
+  void Build(const LatticeIndex<Dim>* cellSizes, int levels, CellTemplate cellTemplate)
+  {
+    // ShrinkMasks[m]: the axes whose edge level m makes shorter than level m - 1.
+    std::vector<unsigned> shrinkMasks(levels, 0u);
+    for (int level = 1; level < levels; ++level)
+    {
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        if (cellSizes[level][axis] < cellSizes[level - 1][axis])
+        {
+          shrinkMasks[level] |= 1u << axis;
+        }
+      }
+    }
+    constexpr unsigned allAxes = (1u << Dim) - 1u;
+    this->CanonicalLevels.assign(static_cast<std::size_t>(levels) << Dim, 0);
+    this->NeedsLevelMap = false;
+    for (int level = 0; level < levels; ++level)
+    {
+      for (unsigned axes = 0; axes <= allAxes; ++axes)
+      {
+        int canonical = level;
+        while (canonical + 1 < levels && (shrinkMasks[canonical + 1] & axes) == 0)
+        {
+          ++canonical;
+        }
+        this->CanonicalLevels[(static_cast<std::size_t>(level) << Dim) | axes] =
+          static_cast<std::int8_t>(canonical);
+        if (canonical + 1 < levels && PopCount(axes) >= 2 &&
+          (shrinkMasks[canonical + 1] & axes) != axes)
+        {
+          this->NeedsLevelMap = true;
+        }
+      }
+    }
+    this->TemplateAllowed.assign(levels, 1);
+    if (cellTemplate == CellTemplate::Checkerboard && Dim == 3)
+    {
+      // The cube template agrees with its square faces only if they are handled at its level:
+      // the next level splits at least two of the three axes.
+      for (int level = 0; level + 1 < levels; ++level)
+      {
+        this->TemplateAllowed[level] = PopCount(shrinkMasks[level + 1]) >= 2;
+      }
+    }
+  }
+
+  int CanonicalLevel(int level, unsigned axes) const
+  {
+    return this->CanonicalLevels[(static_cast<std::size_t>(level) << Dim) | axes];
+  }
+};
+
+/// Corner c (bit i of c selects the far side along the i-th free axis) of a box of edges size
+/// (lattice units) spanning freeAxes, anchor and result in half units.
+template <int Dim>
+LatticeIndex<Dim> BoxCorner(
+  const LatticeIndex<Dim>& anchor, const LatticeIndex<Dim>& size, unsigned freeAxes, unsigned c)
+{
+  LatticeIndex<Dim> point = anchor;
+  int freeIndex = 0;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    if (freeAxes & (1u << axis))
+    {
+      point[axis] += ((c >> freeIndex) & 1u) * 2 * size[axis];
+      ++freeIndex;
+    }
+  }
+  return point;
+}
+
+/// Appends the template of a box (anchor in half units) spanning freeAxes; parity is that of
+/// the sum of the level coordinates of its anchor. With keepBox (hybrid output, and any edge)
+/// the box itself is the one cell.
+template <int Dim>
+void AppendBoxTemplate(CellTemplate cellTemplate, bool keepBox, const LatticeIndex<Dim>& anchor,
+  const LatticeIndex<Dim>& size, int parity, unsigned freeAxes, TessellationCells<Dim>& out)
+{
+  const int k = PopCount(freeAxes);
+  std::array<LatticeIndex<Dim>, CubeInfo<Dim>::VerticesPerCell> corners;
+  for (unsigned c = 0; c < (1u << k); ++c)
+  {
+    corners[c] = BoxCorner<Dim>(anchor, size, freeAxes, c);
+  }
+  auto corner = [&corners](unsigned c) -> const LatticeIndex<Dim>& { return corners[c]; };
+  std::vector<LatticeIndex<Dim>>& points = out.Points;
+  if (k == 1 || keepBox)
+  {
+    points.insert(points.end(), corners.begin(), corners.begin() + (1 << k));
+    out.Shapes.push_back(static_cast<std::uint8_t>(k));
+    return;
+  }
+  const std::size_t first = points.size();
+  if (cellTemplate == CellTemplate::Kuhn)
+  {
+    std::array<int, Dim> order{};
+    std::iota(order.begin(), order.begin() + k, 0);
+    do
+    {
+      unsigned c = 0;
+      points.push_back(corner(c));
+      for (int step = 0; step < k; ++step)
+      {
+        c |= 1u << order[step];
+        points.push_back(corner(c));
+      }
+    } while (std::next_permutation(order.begin(), order.begin() + k));
+  }
+  else if constexpr (Dim == 1)
+  {
+    return; // unreachable: a 1-face is an edge
+  }
+  else if (k == 2)
+  {
+    // Checkerboard: the parity of the level coordinates decides, so that the choice depends
+    // on the face alone. Corners 0=(0,0) 1=(1,0) 2=(0,1) 3=(1,1).
+    const LatticeIndex<Dim> c0 = corner(0), c1 = corner(1), c2 = corner(2), c3 = corner(3);
+    if (parity == 0)
+    {
+      points.insert(points.end(), { c0, c1, c3, c0, c3, c2 });
+    }
+    else
+    {
+      points.insert(points.end(), { c1, c3, c2, c1, c2, c0 });
+    }
+  }
+  else
+  {
+    // k == 3: the even corners form the central tetrahedron; each odd corner with its three
+    // (even) neighbours forms a corner tetrahedron.
+    const bool anchorEven = parity == 0;
+    std::array<unsigned, 4> even{}, odd{};
+    int evenCount = 0, oddCount = 0;
+    for (unsigned c = 0; c < 8; ++c)
+    {
+      const bool cornerEven = ((PopCount(c) & 1) == 0) == anchorEven;
+      if (cornerEven)
+      {
+        even[evenCount++] = c;
+      }
+      else
+      {
+        odd[oddCount++] = c;
+      }
+    }
+    points.insert(
+      points.end(), { corner(even[0]), corner(even[1]), corner(even[2]), corner(even[3]) });
+    for (unsigned o : odd)
+    {
+      points.insert(points.end(), { corner(o), corner(o ^ 1u), corner(o ^ 2u), corner(o ^ 4u) });
+    }
+  }
+  out.Shapes.insert(out.Shapes.end(), (points.size() - first) / (k + 1), 1);
+}
+
 template <int Dim>
 class SpacetreeTessellator
 {
 public:
   using Point = LatticeIndex<Dim>; // in half lattice units
+  using Cells = TessellationCells<Dim>;
 
   /// A k-face of the spacetree: a box of the edges of Level at Anchor, spanning the axes set in
   /// FreeAxes.
@@ -143,18 +386,24 @@ public:
 
   struct Scratch
   {
-    std::vector<Point> Simplices;
-    std::array<std::vector<Point>, Dim + 1> FacetBuffers;
+    Cells LeafCells;
+    std::array<Cells, Dim + 1> FacetBuffers;
   };
 
-  /// Counts the simplices of every selected leaf and numbers the points they use.
+  /// Counts the cells of every selected leaf and numbers the points they use.
   template <class Executor>
   Status Prepare(
     const Spacetree<Dim>& tree, const SpacetreeTessellationOptions& options, Executor& executor)
   {
-    if (options.Template == CellTemplate::Checkerboard && Dim > 3)
+    if (options.Template == CellTemplate::Checkerboard && Dim > 3 &&
+      options.Output == TessellationOutput::Simplices &&
+      options.Templates != TemplateRule::MidpointEverywhere)
     {
       return Status::Invalid("the checkerboard template exists for dimensions 1 to 3 only");
+    }
+    if (options.BoundaryLayers < 0)
+    {
+      return Status::Invalid("the number of boundary layers must not be negative");
     }
     this->Tree = &tree;
     this->Sizes = tree.CellSizes.data();
@@ -190,39 +439,66 @@ public:
     {
       return Status::Aborted();
     }
+    const Status selection = this->SelectLeaves(executor);
+    if (!selection.IsOk())
+    {
+      return selection;
+    }
     executor.ReportProgress(0.1);
 
-    this->SimplexOffsets.assign(static_cast<std::size_t>(leaves + 1), 0);
+    this->CellOffsets.assign(static_cast<std::size_t>(leaves + 1), 0);
+    this->ConnectivityOffsets.assign(static_cast<std::size_t>(leaves + 1), 0);
     CountKernel<Executor> count{ this, &executor };
     executor.For(0, leaves, 2048, count);
     if (executor.ShouldAbort())
     {
       return Status::Aborted();
     }
-    // Exclusive prefix sum: SimplexOffsets[leaf] becomes the leaf's first simplex.
-    std::int64_t running = 0;
+    // Exclusive prefix sums: the offsets of a leaf become those of its first cell and point id.
+    std::int64_t cells = 0, ids = 0;
     for (std::int64_t leaf = 0; leaf <= leaves; ++leaf)
     {
-      const std::int64_t here = this->SimplexOffsets[leaf];
-      this->SimplexOffsets[leaf] = running;
-      running += here;
+      const std::int64_t leafCells = this->CellOffsets[leaf];
+      const std::int64_t leafIds = this->ConnectivityOffsets[leaf];
+      this->CellOffsets[leaf] = cells;
+      this->ConnectivityOffsets[leaf] = ids;
+      cells += leafCells;
+      ids += leafIds;
     }
     this->NumberOfPoints = this->PointSet.BuildRank();
+    if (options.Output == TessellationOutput::Leaves)
+    {
+      this->HangingSet = LatticeBitset<Dim>(vertexDims);
+      HangingNodeKernel hanging{ this };
+      executor.For(0, leaves, 2048, hanging);
+      if (executor.ShouldAbort())
+      {
+        return Status::Aborted();
+      }
+    }
     executor.ReportProgress(0.5);
     return Status::Ok();
   }
 
-  std::int64_t GetNumberOfSimplices() const { return this->SimplexOffsets.back(); }
+  std::int64_t GetNumberOfCells() const { return this->CellOffsets.back(); }
+  /// Total number of point ids over all cells.
+  std::int64_t GetConnectivitySize() const { return this->ConnectivityOffsets.back(); }
   std::int64_t GetNumberOfPoints() const { return this->NumberOfPoints; }
+  /// Whether every cell is a simplex (Dim + 1 point ids each).
+  bool IsSimplicial() const { return this->Options.Output == TessellationOutput::Simplices; }
 
-  /// Writes (Dim+1) point ids per simplex, positively oriented, and the material index of each
-  /// simplex. IdType is the integer type of the output connectivity.
+  std::int64_t GetNumberOfSimplices() const { return this->GetNumberOfCells(); }
+
+  /// Writes the point ids of every cell (see CellPointCount for their order), positively
+  /// oriented, its shape (may be null for simplicial output) and the material index of each
+  /// cell. IdType is the integer type of the output connectivity.
   template <class IdType, class Executor>
-  Status WriteSimplices(IdType* connectivity, MaterialIndex* materials, Executor& executor)
+  Status WriteCells(
+    IdType* connectivity, std::uint8_t* shapes, MaterialIndex* materials, Executor& executor)
   {
     if (this->NeedsLevelMap && !this->Map)
     {
-      // Prepare's map was released by an earlier WriteSimplices.
+      // Prepare's map was released by an earlier WriteCells.
       this->Map.reset(new LevelMap<Dim>());
       const Status status = this->Map->Build(*this->Tree, executor);
       if (!status.IsOk())
@@ -230,10 +506,21 @@ public:
         return status;
       }
     }
-    WriteKernel<IdType, Executor> write{ this, connectivity, materials, &executor };
+    WriteKernel<IdType, Executor> write{ this, connectivity, shapes, materials, &executor };
     executor.For(0, this->Tree->GetNumberOfLeaves(), 2048, write);
     this->Map.reset();
     return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
+  }
+
+  /// WriteCells for simplicial output.
+  template <class IdType, class Executor>
+  Status WriteSimplices(IdType* connectivity, MaterialIndex* materials, Executor& executor)
+  {
+    if (!this->IsSimplicial())
+    {
+      return Status::Invalid("the tessellation is not simplicial");
+    }
+    return this->WriteCells(connectivity, nullptr, materials, executor);
   }
 
   /// Calls visit(pointId, halfUnitPoint) for every point, from any thread, each point once.
@@ -245,10 +532,54 @@ public:
     return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
   }
 
+  /// Whether a point (half units) is a corner of a leaf of the tree.
+  bool IsLeafVertex(const Point& point) const
+  {
+    LatticeIndex<Dim> vertex;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      if (point[axis] % 2 != 0)
+      {
+        return false;
+      }
+      vertex[axis] = point[axis] / 2;
+    }
+    return this->VertexSet.Test(vertex);
+  }
+
+  /// Leaves output: whether a point (half units) lies on the boundary of an output leaf without
+  /// being one of its corners.
+  bool IsHangingNode(const Point& point) const
+  {
+    if (this->Options.Output != TessellationOutput::Leaves || !this->IsLeafVertex(point))
+    {
+      return false;
+    }
+    LatticeIndex<Dim> vertex;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      vertex[axis] = point[axis] / 2;
+    }
+    return this->HangingSet.Test(vertex);
+  }
+
+  /// Points that are not corners of leaves: the face and cell centres the tessellation added.
+  std::int64_t CountInsertedPoints() const
+  {
+    std::int64_t inserted = 0;
+    this->PointSet.VisitSetBits(0, this->PointSet.GetNumberOfWords(),
+      [&](std::int64_t, const Point& point) { inserted += !this->IsLeafVertex(point); });
+    return inserted;
+  }
+
   /// Whether a leaf belongs to the output.
   bool IsSelected(std::int64_t leaf) const
   {
-    return this->Options.IncludeBackground || this->Tree->LeafMaterials[leaf] != BackgroundMaterial;
+    if (this->Options.IncludeBackground || this->Tree->LeafMaterials[leaf] != BackgroundMaterial)
+    {
+      return true;
+    }
+    return !this->LayerLeaves.empty() && this->LayerLeaves[leaf] != 0;
   }
 
   /// The leaf as a Dim-face.
@@ -257,95 +588,87 @@ public:
     return Face{ this->Tree->LeafAnchors[leaf], this->Tree->LeafLevels[leaf], (1u << Dim) - 1u };
   }
 
-  /// Whether a leaf takes its level's cell template: no leaf corner on its boundary besides its
-  /// corners, and a template that fits its faces. Its simplices are then
-  /// RegularCellSimplices(leaf) over its corners.
+  /// Whether a leaf is emitted as one tabulated piece: its level's simplicial template (no leaf
+  /// corner on its boundary besides its corners, and a template that fits its faces), the cube
+  /// itself in hybrid output, or any leaf in leaves output. Its cells are then
+  /// RegularCellCodes(leaf) over its corners.
   bool IsRegularLeaf(std::int64_t leaf) const
   {
-    const Face cell = this->LeafFace(leaf);
-    return this->TemplateAllowed[cell.Level] && this->IsBoundaryRegular(cell);
+    switch (this->Options.Output)
+    {
+      case TessellationOutput::Leaves:
+        return true;
+      case TessellationOutput::Hybrid:
+        return this->IsBoundaryRegular(this->LeafFace(leaf));
+      default:
+      {
+        const Face cell = this->LeafFace(leaf);
+        return this->Options.Templates != TemplateRule::MidpointEverywhere &&
+          this->Tables.TemplateAllowed[cell.Level] && this->IsBoundaryRegular(cell);
+      }
+    }
   }
 
-  /// Corner codes (bit i: far side along axis i), Dim+1 per simplex, positively oriented, of the
-  /// template of a regular leaf.
+  /// Corner codes (bit i: far side along axis i) of the cells of a regular leaf, positively
+  /// oriented: Dim + 1 per simplex, or 2^Dim for the one cube of hybrid and leaves output.
+  const std::vector<std::uint8_t>& RegularCellCodes(std::int64_t leaf) const
+  {
+    return this->RegularCellTables[this->IsSimplicial() ? this->Parity(this->LeafFace(leaf)) : 0];
+  }
   const std::vector<std::uint8_t>& RegularCellSimplices(std::int64_t leaf) const
   {
-    return this->RegularCellTables[this->Parity(this->LeafFace(leaf))];
+    return this->RegularCellCodes(leaf);
   }
+  /// Shape of the cells of RegularCellCodes.
+  int RegularCellShape() const { return this->IsSimplicial() ? 1 : Dim; }
 
-  /// Appends the Dim-simplices of a leaf (Dim+1 half-unit points each), unoriented.
+  /// Appends the Dim-cells of a leaf, unoriented.
   void TessellateLeaf(std::int64_t leaf, Scratch& scratch) const
   {
-    this->TriangulateUnsplit(this->LeafFace(leaf), scratch.Simplices, scratch);
+    this->TriangulateUnsplit(this->LeafFace(leaf), scratch.LeafCells, scratch);
   }
 
-  /// Reorders the points of each simplex in the buffer so that its orientation is positive.
-  static void Orient(std::vector<Point>& simplices)
+  /// Reorders the points of each cell so that its orientation (CellDeterminant) is positive.
+  static void Orient(Cells& cells)
+  {
+    Point* points = cells.Points.data();
+    for (std::uint8_t shape : cells.Shapes)
+    {
+      if (CellDeterminant<Dim>(points, shape) < 0)
+      {
+        // Mirror the cube along its first axis.
+        Point* corners = points + (Dim - shape);
+        for (int c = 0; c < (1 << shape); c += 2)
+        {
+          std::swap(corners[c], corners[c + 1]);
+        }
+      }
+      points += CellPointCount(Dim, shape);
+    }
+  }
+
+  /// Orient for a buffer of simplices (Dim + 1 points each).
+  static void OrientSimplices(std::vector<Point>& simplices)
   {
     for (std::size_t first = 0; first < simplices.size(); first += Dim + 1)
     {
       if (SimplexDeterminant<Dim>(&simplices[first]) < 0)
       {
-        std::swap(simplices[first], simplices[first + 1]);
+        std::swap(simplices[first + Dim - 1], simplices[first + Dim]);
       }
     }
   }
 
 private:
-  /// The level tables: for every level and axis set, the canonical level of a face of that level
-  /// spanning those axes; whether a cell of each level may take the cell template; whether
-  /// some face needs the level map.
   void BuildLevelTables()
   {
-    const int levels = this->Tree->MaxLevel + 1;
-    // ShrinkMasks[m]: the axes whose edge level m makes shorter than level m - 1.
-    std::vector<unsigned> shrinkMasks(levels, 0u);
-    for (int level = 1; level < levels; ++level)
-    {
-      for (int axis = 0; axis < Dim; ++axis)
-      {
-        if (this->Tree->GetCellSize(level)[axis] < this->Tree->GetCellSize(level - 1)[axis])
-        {
-          shrinkMasks[level] |= 1u << axis;
-        }
-      }
-    }
-    constexpr unsigned allAxes = (1u << Dim) - 1u;
-    this->CanonicalLevels.assign(static_cast<std::size_t>(levels) << Dim, 0);
-    this->NeedsLevelMap = false;
-    for (int level = 0; level < levels; ++level)
-    {
-      for (unsigned axes = 0; axes <= allAxes; ++axes)
-      {
-        int canonical = level;
-        while (canonical + 1 < levels && (shrinkMasks[canonical + 1] & axes) == 0)
-        {
-          ++canonical;
-        }
-        this->CanonicalLevels[(static_cast<std::size_t>(level) << Dim) | axes] =
-          static_cast<std::int8_t>(canonical);
-        if (canonical + 1 < levels && PopCount(axes) >= 2 &&
-          (shrinkMasks[canonical + 1] & axes) != axes)
-        {
-          this->NeedsLevelMap = true;
-        }
-      }
-    }
-    this->TemplateAllowed.assign(levels, 1);
-    if (this->Options.Template == CellTemplate::Checkerboard && Dim == 3)
-    {
-      // The cube template agrees with its square faces only if they are handled at its level:
-      // the next level splits at least two of the three axes.
-      for (int level = 0; level + 1 < levels; ++level)
-      {
-        this->TemplateAllowed[level] = PopCount(shrinkMasks[level + 1]) >= 2;
-      }
-    }
+    this->Tables.Build(this->Sizes, this->MaxLevel + 1, this->Options.Template);
+    this->NeedsLevelMap = this->Tables.NeedsLevelMap;
   }
 
   int CanonicalLevel(int level, unsigned axes) const
   {
-    return this->CanonicalLevels[(static_cast<std::size_t>(level) << Dim) | axes];
+    return this->Tables.CanonicalLevel(level, axes);
   }
 
   const LatticeIndex<Dim>& Size(const Face& face) const { return this->Sizes[face.Level]; }
@@ -362,19 +685,27 @@ private:
     return static_cast<int>(sum & 1);
   }
 
-  /// Tabulates the template of a regular cell for both anchor parities, oriented once, so
-  /// that regular leaves (most of them) skip the recursion and the determinants.
+  /// Tabulates the cells of a regular leaf (for both anchor parities in simplicial output),
+  /// oriented once, so that regular leaves (most of them) skip the recursion and the
+  /// determinants.
   void BuildRegularCellTables()
   {
     for (int parity = 0; parity < 2; ++parity)
     {
-      std::vector<Point> simplices;
-      this->AppendTemplate(
-        Point{}, Spacetree<Dim>::UnitSize(), parity, (1u << Dim) - 1u, simplices);
-      Orient(simplices);
       auto& table = this->RegularCellTables[parity];
       table.clear();
-      for (const Point& point : simplices)
+      if (!this->IsSimplicial())
+      {
+        for (unsigned c = 0; c < (1u << Dim); ++c)
+        {
+          table.push_back(static_cast<std::uint8_t>(c));
+        }
+        continue;
+      }
+      Cells cells;
+      this->AppendTemplate(Point{}, Spacetree<Dim>::UnitSize(), parity, (1u << Dim) - 1u, cells);
+      Orient(cells);
+      for (const Point& point : cells.Points)
       {
         unsigned code = 0;
         for (int axis = 0; axis < Dim; ++axis)
@@ -412,21 +743,26 @@ private:
     return point;
   }
 
-  /// Corner c (bit i of c selects the far side along the i-th free axis) of a box in half units.
-  static Point Corner(
-    const Point& anchor, const LatticeIndex<Dim>& size, unsigned freeAxes, unsigned c)
+  /// Corner c of a face, in half units.
+  Point FaceCorner(const Face& face, unsigned c) const
   {
-    Point point = anchor;
-    int freeIndex = 0;
-    for (int axis = 0; axis < Dim; ++axis)
+    return BoxCorner<Dim>(HalfUnits(face.Anchor), this->Size(face), face.FreeAxes, c);
+  }
+
+  /// The facet of a face across its free axis number freeIndex, on the given side.
+  Face Facet(const Face& face, int freeIndex, int side) const
+  {
+    int axis = 0;
+    for (int seen = -1; axis < Dim; ++axis)
     {
-      if (freeAxes & (1u << axis))
+      if ((face.FreeAxes & (1u << axis)) && ++seen == freeIndex)
       {
-        point[axis] += ((c >> freeIndex) & 1u) * 2 * size[axis];
-        ++freeIndex;
+        break;
       }
     }
-    return point;
+    Face facet{ face.Anchor, face.Level, face.FreeAxes & ~(1u << axis) };
+    facet.Anchor[axis] += side * this->Size(face)[axis];
+    return facet;
   }
 
   /// Whether a face at its canonical level is split by finer leaves.
@@ -476,6 +812,18 @@ private:
     return false;
   }
 
+  /// Calls visit(child) for the next-level children of a split face.
+  template <class Visitor>
+  void ForEachChildFace(const Face& face, Visitor&& visit) const
+  {
+    const LatticeIndex<Dim> size = this->Size(face);
+    const LatticeIndex<Dim> childSize = this->Sizes[face.Level + 1];
+    ForEachChildAnchor<Dim>(face.Anchor, size, childSize, face.FreeAxes,
+      [&](const LatticeIndex<Dim>& anchor) {
+        visit(Face{ anchor, face.Level + 1, face.FreeAxes });
+      });
+  }
+
   /// No leaf corner on the boundary besides the face's corners: no edge of the face is split.
   bool IsBoundaryRegular(const Face& face) const
   {
@@ -520,174 +868,448 @@ private:
     return true;
   }
 
-  /// Appends the k-simplices (k+1 points each) of a face of the spacetree.
-  void Triangulate(Face face, std::vector<Point>& out, Scratch& scratch) const
+  /// Whether an unsplit face of dimension >= 2 at its canonical level takes its template.
+  bool TakesTemplate(const Face& face) const
+  {
+    if (this->Options.Output == TessellationOutput::Hybrid)
+    {
+      return this->IsBoundaryRegular(face);
+    }
+    return this->Options.Templates != TemplateRule::MidpointEverywhere &&
+      (PopCount(face.FreeAxes) < 3 || this->Tables.TemplateAllowed[face.Level]) &&
+      this->IsBoundaryRegular(face);
+  }
+
+  /// Appends the k-cells of a face of the spacetree.
+  void Triangulate(Face face, Cells& out, Scratch& scratch) const
   {
     if (face.FreeAxes == 0)
     {
-      out.push_back(HalfUnits(face.Anchor));
+      out.Points.push_back(HalfUnits(face.Anchor));
+      out.Shapes.push_back(0);
       return;
     }
     face.Level = this->CanonicalLevel(face.Level, face.FreeAxes);
     if (this->IsSplit(face))
     {
-      const LatticeIndex<Dim> size = this->Size(face);
-      const LatticeIndex<Dim> childSize = this->Sizes[face.Level + 1];
-      Face child{ face.Anchor, face.Level + 1, face.FreeAxes };
-      for (;;)
-      {
-        this->Triangulate(child, out, scratch);
-        int axis = 0;
-        for (; axis < Dim; ++axis)
-        {
-          if (!(face.FreeAxes & (1u << axis)))
-          {
-            continue;
-          }
-          child.Anchor[axis] += childSize[axis];
-          if (child.Anchor[axis] < face.Anchor[axis] + size[axis])
-          {
-            break;
-          }
-          child.Anchor[axis] = face.Anchor[axis];
-        }
-        if (axis == Dim)
-        {
-          return;
-        }
-      }
-    }
-    if (face.FreeAxes == (face.FreeAxes & (~face.FreeAxes + 1u)))
-    {
-      // An unsplit edge: its two end points.
-      const Point first = HalfUnits(face.Anchor);
-      Point second = first;
-      for (int axis = 0; axis < Dim; ++axis)
-      {
-        second[axis] += (face.FreeAxes & (1u << axis)) ? 2 * this->Size(face)[axis] : 0;
-      }
-      out.push_back(first);
-      out.push_back(second);
+      this->ForEachChildFace(
+        face, [&](const Face& child) { this->Triangulate(child, out, scratch); });
       return;
     }
     this->TriangulateUnsplit(face, out, scratch);
   }
 
-  void TriangulateUnsplit(const Face& face, std::vector<Point>& out, Scratch& scratch) const
+  void TriangulateUnsplit(const Face& face, Cells& out, Scratch& scratch) const
   {
     const int k = PopCount(face.FreeAxes);
-    if ((k < 3 || this->TemplateAllowed[face.Level]) && this->IsBoundaryRegular(face))
+    if (k == 1 || this->TakesTemplate(face))
     {
       const int parity =
         k >= 2 && this->Options.Template == CellTemplate::Checkerboard ? this->Parity(face) : 0;
       this->AppendTemplate(HalfUnits(face.Anchor), this->Size(face), parity, face.FreeAxes, out);
       return;
     }
-    // Recursive midpoint rule: cone from the centre over the triangulated facets.
-    std::vector<Point>& facets = scratch.FacetBuffers[k - 1];
-    facets.clear();
-    const LatticeIndex<Dim> size = this->Size(face);
-    for (int axis = 0; axis < Dim; ++axis)
+    if (this->Options.Output == TessellationOutput::Simplices &&
+      this->Options.Templates == TemplateRule::Extended)
     {
-      if (!(face.FreeAxes & (1u << axis)))
+      const int apex = this->ExtendedApex(face);
+      if (apex >= 0)
       {
-        continue;
-      }
-      for (int side = 0; side < 2; ++side)
-      {
-        Face facet{ face.Anchor, face.Level, face.FreeAxes & ~(1u << axis) };
-        facet.Anchor[axis] += side * size[axis];
-        this->Triangulate(facet, facets, scratch);
+        this->AppendCone(face, this->FaceCorner(face, apex), apex, out, scratch);
+        return;
       }
     }
+    // Recursive midpoint rule: cone from the centre over the triangulated facets.
     Point centre = HalfUnits(face.Anchor);
     for (int axis = 0; axis < Dim; ++axis)
     {
       if (face.FreeAxes & (1u << axis))
       {
-        centre[axis] += size[axis];
+        centre[axis] += this->Size(face)[axis];
       }
     }
-    for (std::size_t first = 0; first < facets.size(); first += k)
+    this->AppendCone(face, centre, -1, out, scratch);
+  }
+
+  /// Appends the cone from apex over the cells of the facets of a face, skipping the facets
+  /// that contain corner skipCorner (none if negative).
+  void AppendCone(
+    const Face& face, const Point& apex, int skipCorner, Cells& out, Scratch& scratch) const
+  {
+    const int k = PopCount(face.FreeAxes);
+    Cells& facets = scratch.FacetBuffers[k - 1];
+    facets.Clear();
+    for (int freeIndex = 0; freeIndex < k; ++freeIndex)
     {
-      out.push_back(centre);
-      out.insert(out.end(), facets.begin() + first, facets.begin() + first + k);
+      for (int side = 0; side < 2; ++side)
+      {
+        if (skipCorner >= 0 && ((skipCorner >> freeIndex) & 1) == side)
+        {
+          continue;
+        }
+        this->Triangulate(this->Facet(face, freeIndex, side), facets, scratch);
+      }
+    }
+    auto point = facets.Points.begin();
+    for (std::uint8_t shape : facets.Shapes)
+    {
+      const int count = CellPointCount(k - 1, shape);
+      out.Points.push_back(apex);
+      out.Points.insert(out.Points.end(), point, point + count);
+      out.Shapes.push_back(shape);
+      point += count;
     }
   }
 
-  /// Appends the template of a box (anchor in half units) spanning freeAxes; parity is that of
-  /// the sum of the level coordinates of its anchor.
-  void AppendTemplate(const Point& anchor, const LatticeIndex<Dim>& size, int parity,
-    unsigned freeAxes, std::vector<Point>& out) const
+  /// Whether the cells of a face stay within one level of refinement: an unsplit face whose
+  /// facets do, or a split face whose children are unsplit and regular. Extended templates
+  /// cone only over such faces, which bounds their element shapes for any balance level.
+  bool IsShallow(Face face) const
   {
-    const int k = PopCount(freeAxes);
-    std::array<Point, CubeInfo<Dim>::VerticesPerCell> corners;
-    for (unsigned c = 0; c < (1u << k); ++c)
+    face.Level = this->CanonicalLevel(face.Level, face.FreeAxes);
+    const int k = PopCount(face.FreeAxes);
+    if (this->IsSplit(face))
     {
-      corners[c] = Corner(anchor, size, freeAxes, c);
+      bool shallow = true;
+      this->ForEachChildFace(face,
+        [&](const Face& child)
+        {
+          if (shallow)
+          {
+            const Face canonical{ child.Anchor, this->CanonicalLevel(child.Level, child.FreeAxes),
+              child.FreeAxes };
+            shallow = !this->IsSplit(canonical) && (k == 1 || this->TakesTemplate(canonical));
+          }
+        });
+      return shallow;
     }
-    auto corner = [&corners](unsigned c) -> const Point& { return corners[c]; };
+    for (int freeIndex = 0; k > 1 && freeIndex < k; ++freeIndex)
+    {
+      for (int side = 0; side < 2; ++side)
+      {
+        if (!this->IsShallow(this->Facet(face, freeIndex, side)))
+        {
+          return false;
+        }
+      }
+    }
+    return true;
+  }
+
+  /// Whether the triangulation of a face is a cone from the given point (one of its corners).
+  bool IsConeFrom(Face face, const Point& apex) const
+  {
+    face.Level = this->CanonicalLevel(face.Level, face.FreeAxes);
+    if (this->IsSplit(face))
+    {
+      return false;
+    }
+    const int k = PopCount(face.FreeAxes);
     if (k == 1)
     {
-      out.push_back(corner(0));
-      out.push_back(corner(1));
-      return;
+      return true;
     }
-    if (this->Options.Template == CellTemplate::Kuhn)
+    if (this->TakesTemplate(face))
     {
-      std::array<int, Dim> order{};
-      std::iota(order.begin(), order.begin() + k, 0);
-      do
+      if (this->Options.Template == CellTemplate::Kuhn)
       {
-        unsigned c = 0;
-        out.push_back(corner(c));
-        for (int step = 0; step < k; ++step)
+        // Every Kuhn simplex contains the corners 0 and 2^k - 1.
+        return apex == this->FaceCorner(face, 0) || apex == this->FaceCorner(face, (1u << k) - 1);
+      }
+      if (k != 2)
+      {
+        return false;
+      }
+      // The checkerboard square's diagonal joins its corners of even level-coordinate sum.
+      for (unsigned c = 0; c < 4; ++c)
+      {
+        if (apex == this->FaceCorner(face, c))
         {
-          c |= 1u << order[step];
-          out.push_back(corner(c));
+          return ((this->Parity(face) + PopCount(c)) & 1) == 0;
         }
-      } while (std::next_permutation(order.begin(), order.begin() + k));
-      return;
+      }
+      return false;
     }
-    // Checkerboard: the parity of the level coordinates decides, so that the choice depends on
-    // the face alone.
-    const bool anchorEven = parity == 0;
-    if (k == 2)
+    const int extended = this->ExtendedApex(face);
+    return extended >= 0 && apex == this->FaceCorner(face, extended);
+  }
+
+  /// The corner of an irregular unsplit face (canonical level, k >= 2) from which its
+  /// triangulation can be a cone without new points: the facets containing the corner are cones
+  /// from it, and the others are shallow. Corners on the template's diagonals come first, so
+  /// that neighbouring cubes find cones more often. -1 if there is none.
+  int ExtendedApex(const Face& face) const
+  {
+    const int k = PopCount(face.FreeAxes);
+    const int corners = 1 << k;
+    // Facets by (freeIndex, side): shallow, and the corners they are cones from.
+    std::array<bool, 2 * Dim> shallow{};
+    std::array<unsigned, 2 * Dim> coneCorners{};
+    for (int freeIndex = 0; freeIndex < k; ++freeIndex)
     {
-      // Corners 0=(0,0) 1=(1,0) 2=(0,1) 3=(1,1).
-      const Point c0 = corner(0), c1 = corner(1), c2 = corner(2), c3 = corner(3);
-      if (anchorEven)
+      for (int side = 0; side < 2; ++side)
       {
-        out.insert(out.end(), { c0, c1, c3, c0, c3, c2 });
-      }
-      else
-      {
-        out.insert(out.end(), { c1, c3, c2, c1, c2, c0 });
-      }
-      return;
-    }
-    // k == 3: the even corners form the central tetrahedron; each odd corner with its three
-    // (even) neighbours forms a corner tetrahedron.
-    std::array<unsigned, 4> even{}, odd{};
-    int evenCount = 0, oddCount = 0;
-    for (unsigned c = 0; c < 8; ++c)
-    {
-      const bool cornerEven = ((PopCount(c) & 1) == 0) == anchorEven;
-      if (cornerEven)
-      {
-        even[evenCount++] = c;
-      }
-      else
-      {
-        odd[oddCount++] = c;
+        const Face facet = this->Facet(face, freeIndex, side);
+        shallow[2 * freeIndex + side] = this->IsShallow(facet);
+        for (int c = 0; c < corners; ++c)
+        {
+          if (((c >> freeIndex) & 1) == side && this->IsConeFrom(facet, this->FaceCorner(face, c)))
+          {
+            coneCorners[2 * freeIndex + side] |= 1u << c;
+          }
+        }
       }
     }
-    out.insert(out.end(), { corner(even[0]), corner(even[1]), corner(even[2]), corner(even[3]) });
-    for (unsigned o : odd)
+    const int parity = this->Parity(face);
+    for (int pass = 0; pass < 2; ++pass)
     {
-      out.insert(out.end(), { corner(o), corner(o ^ 1u), corner(o ^ 2u), corner(o ^ 4u) });
+      for (int c = 0; c < corners; ++c)
+      {
+        const bool preferred = this->Options.Template == CellTemplate::Kuhn
+          ? (c == 0 || c == corners - 1)
+          : ((parity + PopCount(static_cast<unsigned>(c))) & 1) == 0;
+        if (preferred != (pass == 0))
+        {
+          continue;
+        }
+        bool fits = true;
+        for (int freeIndex = 0; fits && freeIndex < k; ++freeIndex)
+        {
+          const int near = (c >> freeIndex) & 1;
+          fits = (coneCorners[2 * freeIndex + near] & (1u << c)) != 0 &&
+            shallow[2 * freeIndex + 1 - near];
+        }
+        if (fits)
+        {
+          return c;
+        }
+      }
+    }
+    return -1;
+  }
+
+  void AppendTemplate(const Point& anchor, const LatticeIndex<Dim>& size, int parity,
+    unsigned freeAxes, Cells& out) const
+  {
+    AppendBoxTemplate<Dim>(this->Options.Template,
+      this->Options.Output != TessellationOutput::Simplices, anchor, size, parity, freeAxes, out);
+  }
+
+  /// Selects the background leaves of the boundary layers: LayerLeaves[leaf] = 1.
+  template <class Executor>
+  Status SelectLeaves(Executor& executor)
+  {
+    this->LayerLeaves.clear();
+    if (this->Options.IncludeBackground || this->Options.BoundaryLayers == 0)
+    {
+      return Status::Ok();
+    }
+    const Spacetree<Dim>& tree = *this->Tree;
+    const std::int64_t leaves = tree.GetNumberOfLeaves();
+    this->LayerLeaves.assign(static_cast<std::size_t>(leaves), 0);
+    // Lattice cells covered by the selection so far.
+    this->CoveredCells = LatticeBitset<Dim>(this->LatticeDimensions);
+    std::vector<std::int64_t> added;
+    for (std::int64_t leaf = 0; leaf < leaves; ++leaf)
+    {
+      if (tree.LeafMaterials[leaf] != BackgroundMaterial)
+      {
+        added.push_back(leaf);
+      }
+    }
+    for (int layer = 0; layer < this->Options.BoundaryLayers && !added.empty(); ++layer)
+    {
+      for (std::int64_t leaf : added)
+      {
+        const LatticeIndex<Dim> anchor = tree.LeafAnchors[leaf];
+        const LatticeIndex<Dim> size = tree.GetCellSize(tree.LeafLevels[leaf]);
+        LatticeIndex<Dim> upper;
+        for (int axis = 0; axis < Dim; ++axis)
+        {
+          upper[axis] = anchor[axis] + size[axis];
+        }
+        ForEachLatticePoint(anchor, upper,
+          [&](const LatticeIndex<Dim>& cell)
+          {
+            this->CoveredCells.Set(cell);
+            return false;
+          });
+      }
+      LayerKernel touch{ this };
+      executor.For(0, leaves, 1024, touch);
+      if (executor.ShouldAbort())
+      {
+        return Status::Aborted();
+      }
+      added.clear();
+      for (std::int64_t leaf = 0; leaf < leaves; ++leaf)
+      {
+        if (this->LayerLeaves[leaf] == 2)
+        {
+          this->LayerLeaves[leaf] = 1;
+          added.push_back(leaf);
+        }
+      }
+    }
+    this->CoveredCells = LatticeBitset<Dim>();
+    return Status::Ok();
+  }
+
+  /// Calls visit(point) for the lattice points of the box [lower, upper) until it returns true;
+  /// returns whether it did.
+  template <class Visitor>
+  static bool ForEachLatticePoint(
+    const LatticeIndex<Dim>& lower, const LatticeIndex<Dim>& upper, Visitor&& visit)
+  {
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      if (upper[axis] <= lower[axis])
+      {
+        return false;
+      }
+    }
+    LatticeIndex<Dim> point = lower;
+    for (;;)
+    {
+      if (visit(point))
+      {
+        return true;
+      }
+      int axis = 0;
+      for (; axis < Dim; ++axis)
+      {
+        if (++point[axis] < upper[axis])
+        {
+          break;
+        }
+        point[axis] = lower[axis];
+      }
+      if (axis == Dim)
+      {
+        return false;
+      }
     }
   }
+
+  /// Whether a background leaf touches (shares at least a point with) a covered lattice cell.
+  bool TouchesCoveredCells(std::int64_t leaf) const
+  {
+    const Spacetree<Dim>& tree = *this->Tree;
+    const LatticeIndex<Dim> anchor = tree.LeafAnchors[leaf];
+    const LatticeIndex<Dim> size = tree.GetCellSize(tree.LeafLevels[leaf]);
+    // The cells around the leaf: for each axis and side, the slab of cells just outside it.
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      for (int side = 0; side < 2; ++side)
+      {
+        LatticeIndex<Dim> lower, upper;
+        for (int other = 0; other < Dim; ++other)
+        {
+          lower[other] = std::max<std::int64_t>(anchor[other] - 1, 0);
+          upper[other] =
+            std::min<std::int64_t>(anchor[other] + size[other] + 1, this->LatticeDimensions[other]);
+        }
+        lower[axis] = side == 0 ? anchor[axis] - 1 : anchor[axis] + size[axis];
+        upper[axis] = lower[axis] + 1;
+        if (lower[axis] < 0 || upper[axis] > this->LatticeDimensions[axis])
+        {
+          continue;
+        }
+        if (ForEachLatticePoint(lower, upper,
+              [&](const LatticeIndex<Dim>& cell) { return this->CoveredCells.Test(cell); }))
+        {
+          return true;
+        }
+      }
+    }
+    return false;
+  }
+
+  struct LayerKernel
+  {
+    using Scratch = NoScratch;
+    SpacetreeTessellator* Self;
+    void operator()(NoScratch&, std::int64_t begin, std::int64_t end) const
+    {
+      for (std::int64_t leaf = begin; leaf < end; ++leaf)
+      {
+        if (this->Self->Tree->LeafMaterials[leaf] == BackgroundMaterial &&
+          this->Self->LayerLeaves[leaf] == 0 && this->Self->TouchesCoveredCells(leaf))
+        {
+          this->Self->LayerLeaves[leaf] = 2; // added by this layer
+        }
+      }
+    }
+  };
+
+  /// Marks the output points that lie on the boundary of an output leaf besides its corners,
+  /// found by descending its boundary faces through their splits.
+  void MarkHangingNodes(const Face& face, std::int64_t leaf) const
+  {
+    if (face.FreeAxes == 0)
+    {
+      const Point point = HalfUnits(face.Anchor);
+      if (this->PointSet.Test(point) && !this->IsLeafCorner(leaf, face.Anchor))
+      {
+        this->HangingSet.Set(face.Anchor);
+      }
+      return;
+    }
+    const Face canonical{ face.Anchor, this->CanonicalLevel(face.Level, face.FreeAxes),
+      face.FreeAxes };
+    if (this->IsSplit(canonical))
+    {
+      this->ForEachChildFace(
+        canonical, [&](const Face& child) { this->MarkHangingNodes(child, leaf); });
+      return;
+    }
+    const int k = PopCount(face.FreeAxes);
+    for (int freeIndex = 0; freeIndex < k; ++freeIndex)
+    {
+      for (int side = 0; side < 2; ++side)
+      {
+        this->MarkHangingNodes(this->Facet(canonical, freeIndex, side), leaf);
+      }
+    }
+  }
+
+  bool IsLeafCorner(std::int64_t leaf, const LatticeIndex<Dim>& vertex) const
+  {
+    const LatticeIndex<Dim>& anchor = this->Tree->LeafAnchors[leaf];
+    const LatticeIndex<Dim> size = this->Tree->GetCellSize(this->Tree->LeafLevels[leaf]);
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      if (vertex[axis] != anchor[axis] && vertex[axis] != anchor[axis] + size[axis])
+      {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  struct HangingNodeKernel
+  {
+    using Scratch = NoScratch;
+    const SpacetreeTessellator* Self;
+    void operator()(NoScratch&, std::int64_t begin, std::int64_t end) const
+    {
+      for (std::int64_t leaf = begin; leaf < end; ++leaf)
+      {
+        if (!this->Self->IsSelected(leaf))
+        {
+          continue;
+        }
+        const Face cell = this->Self->LeafFace(leaf);
+        for (int freeIndex = 0; freeIndex < Dim; ++freeIndex)
+        {
+          for (int side = 0; side < 2; ++side)
+          {
+            this->Self->MarkHangingNodes(this->Self->Facet(cell, freeIndex, side), leaf);
+          }
+        }
+      }
+    }
+  };
 
   struct MarkVerticesKernel
   {
@@ -736,18 +1358,21 @@ private:
           {
             this->Self->PointSet.Set(corner);
           }
-          this->Self->SimplexOffsets[leaf] =
-            static_cast<std::int64_t>(this->Self->RegularCellSimplices(leaf).size()) / (Dim + 1);
+          const std::int64_t ids =
+            static_cast<std::int64_t>(this->Self->RegularCellCodes(leaf).size());
+          this->Self->ConnectivityOffsets[leaf] = ids;
+          this->Self->CellOffsets[leaf] = ids / CellPointCount(Dim, this->Self->RegularCellShape());
           continue;
         }
-        scratch.Simplices.clear();
+        scratch.LeafCells.Clear();
         this->Self->TessellateLeaf(leaf, scratch);
-        for (const Point& point : scratch.Simplices)
+        for (const Point& point : scratch.LeafCells.Points)
         {
           this->Self->PointSet.Set(point);
         }
-        this->Self->SimplexOffsets[leaf] =
-          static_cast<std::int64_t>(scratch.Simplices.size()) / (Dim + 1);
+        this->Self->CellOffsets[leaf] = static_cast<std::int64_t>(scratch.LeafCells.Size());
+        this->Self->ConnectivityOffsets[leaf] =
+          static_cast<std::int64_t>(scratch.LeafCells.Points.size());
       }
       this->Exec->ReportProgress(
         0.1 + 0.4 * static_cast<double>(end) / this->Self->Tree->GetNumberOfLeaves());
@@ -760,6 +1385,7 @@ private:
     using Scratch = typename SpacetreeTessellator::Scratch;
     const SpacetreeTessellator* Self;
     IdType* Connectivity;
+    std::uint8_t* Shapes;
     MaterialIndex* Materials;
     Executor* Exec;
     void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
@@ -774,9 +1400,9 @@ private:
         {
           continue;
         }
-        const std::int64_t simplex = this->Self->SimplexOffsets[leaf];
-        const std::int64_t count = this->Self->SimplexOffsets[leaf + 1] - simplex;
-        IdType* ids = this->Connectivity + simplex * (Dim + 1);
+        const std::int64_t cell = this->Self->CellOffsets[leaf];
+        const std::int64_t count = this->Self->CellOffsets[leaf + 1] - cell;
+        IdType* ids = this->Connectivity + this->Self->ConnectivityOffsets[leaf];
         if (this->Self->IsRegularLeaf(leaf))
         {
           const auto corners = this->Self->LeafCorners(leaf);
@@ -785,22 +1411,32 @@ private:
           {
             cornerIds[c] = static_cast<IdType>(this->Self->PointSet.Rank(corners[c]));
           }
-          for (std::uint8_t code : this->Self->RegularCellSimplices(leaf))
+          for (std::uint8_t code : this->Self->RegularCellCodes(leaf))
           {
             *ids++ = cornerIds[code];
+          }
+          if (this->Shapes)
+          {
+            std::fill(this->Shapes + cell, this->Shapes + cell + count,
+              static_cast<std::uint8_t>(this->Self->RegularCellShape()));
           }
         }
         else
         {
-          scratch.Simplices.clear();
+          scratch.LeafCells.Clear();
           this->Self->TessellateLeaf(leaf, scratch);
-          Orient(scratch.Simplices);
-          for (const Point& point : scratch.Simplices)
+          Orient(scratch.LeafCells);
+          for (const Point& point : scratch.LeafCells.Points)
           {
             *ids++ = static_cast<IdType>(this->Self->PointSet.Rank(point));
           }
+          if (this->Shapes)
+          {
+            std::copy(scratch.LeafCells.Shapes.begin(), scratch.LeafCells.Shapes.end(),
+              this->Shapes + cell);
+          }
         }
-        std::fill(this->Materials + simplex, this->Materials + simplex + count,
+        std::fill(this->Materials + cell, this->Materials + cell + count,
           this->Self->Tree->LeafMaterials[leaf]);
       }
       this->Exec->ReportProgress(
@@ -826,15 +1462,20 @@ private:
   int MaxLevel = 0;
   SpacetreeTessellationOptions Options;
   LatticeIndex<Dim> LatticeDimensions{};
-  std::vector<std::int8_t> CanonicalLevels;
-  std::vector<std::uint8_t> TemplateAllowed;
+  TessellationLevelTables<Dim> Tables;
   bool NeedsLevelMap = false;
-  /// Levels of the leaves per lattice cell, from Prepare to the end of WriteSimplices, for
+  /// Levels of the leaves per lattice cell, from Prepare to the end of WriteCells, for
   /// patterns that leave axes unsplit.
   std::unique_ptr<LevelMap<Dim>> Map;
   LatticeBitset<Dim> VertexSet;
   LatticeBitset<Dim> PointSet;
-  std::vector<std::int64_t> SimplexOffsets;
+  /// Leaves output: the output points that hang on an output leaf (vertex lattice).
+  mutable LatticeBitset<Dim> HangingSet;
+  /// Boundary layers: background leaves selected (1), and the cells covered while selecting.
+  std::vector<std::uint8_t> LayerLeaves;
+  LatticeBitset<Dim> CoveredCells;
+  std::vector<std::int64_t> CellOffsets;
+  std::vector<std::int64_t> ConnectivityOffsets;
   std::int64_t NumberOfPoints = 0;
   std::array<std::vector<std::uint8_t>, 2> RegularCellTables;
 };

@@ -260,17 +260,24 @@ stm::Status BuildTree(const LabelImage<D>& image, std::int64_t maxCellSize, int 
   return BuildTreeWithPlan<D>(image, plan, balanceLevel, faceBalanceOnly, executor, tree);
 }
 
-/// The output of the tessellator, in the form the VTK layer would copy it.
+/// The output of the tessellator, in the form the VTK layer would copy it: cells of any shape
+/// (see stm::CellPointCount), simplices only for simplicial output.
 template <int D>
-struct SimplicialMesh
+struct TessellationMesh
 {
   std::vector<std::int64_t> Connectivity;
+  /// Shape j of every cell (1 simplex, D cube, in between a cone over a j-cube).
+  std::vector<std::uint8_t> Shapes;
+  /// Offset of every cell's first point id in Connectivity, and the total at the end.
+  std::vector<std::int64_t> Offsets{ 0 };
   std::vector<stm::MaterialIndex> Materials;
   /// Point coordinates in half lattice units, indexed by point id.
   std::vector<stm::LatticeIndex<D>> HalfUnitPoints;
   /// How many times VisitPoints reported each point id (must be exactly once).
   std::vector<int> VisitCounts;
 
+  std::int64_t GetNumberOfCells() const { return static_cast<std::int64_t>(this->Shapes.size()); }
+  /// For simplicial output only (every cell has D + 1 points).
   std::int64_t GetNumberOfSimplices() const
   {
     return static_cast<std::int64_t>(this->Connectivity.size()) / (D + 1);
@@ -279,9 +286,27 @@ struct SimplicialMesh
   {
     return static_cast<std::int64_t>(this->HalfUnitPoints.size());
   }
+  /// For simplicial output only: corner `corner` of simplex `simplex`.
   const stm::LatticeIndex<D>& Vertex(std::int64_t simplex, int corner) const
   {
     return this->HalfUnitPoints[this->Connectivity[simplex * (D + 1) + corner]];
+  }
+  int GetCellSize(std::int64_t cell) const
+  {
+    return static_cast<int>(this->Offsets[cell + 1] - this->Offsets[cell]);
+  }
+  /// Point `index` of a cell of any shape: its apexes first, then its cube corners.
+  std::int64_t CellPointId(std::int64_t cell, int index) const
+  {
+    return this->Connectivity[this->Offsets[cell] + index];
+  }
+  const stm::LatticeIndex<D>& CellPoint(std::int64_t cell, int index) const
+  {
+    return this->HalfUnitPoints[this->CellPointId(cell, index)];
+  }
+  std::int64_t CountCellsOfShape(int shape) const
+  {
+    return std::count(this->Shapes.begin(), this->Shapes.end(), static_cast<std::uint8_t>(shape));
   }
   /// Coordinates in lattice units (voxel edge = 1): exact, since they are halves of integers.
   std::vector<double> Coordinates() const
@@ -303,23 +328,38 @@ struct SimplicialMesh
   }
 };
 
+/// The name the simplicial tests know the mesh by.
+template <int D>
+using SimplicialMesh = TessellationMesh<D>;
+
+/// Prepares and writes a tessellation with the given tessellator, which stays available for
+/// its queries (CountInsertedPoints, IsHangingNode, ...).
 template <int D, class Executor>
 stm::Status TessellateTree(const stm::Spacetree<D>& tree,
-  const stm::SpacetreeTessellationOptions& options, Executor& executor, SimplicialMesh<D>& mesh)
+  const stm::SpacetreeTessellationOptions& options, Executor& executor, TessellationMesh<D>& mesh,
+  stm::SpacetreeTessellator<D>& tessellator)
 {
-  stm::SpacetreeTessellator<D> tessellator;
   stm::Status status = tessellator.Prepare(tree, options, executor);
   if (!status.IsOk())
   {
     return status;
   }
-  mesh.Connectivity.assign(
-    static_cast<std::size_t>(tessellator.GetNumberOfSimplices() * (D + 1)), -1);
-  mesh.Materials.assign(static_cast<std::size_t>(tessellator.GetNumberOfSimplices()), 0xFFFF);
-  status = tessellator.WriteSimplices(mesh.Connectivity.data(), mesh.Materials.data(), executor);
+  const std::int64_t cells = tessellator.GetNumberOfCells();
+  mesh.Connectivity.assign(static_cast<std::size_t>(tessellator.GetConnectivitySize()), -1);
+  mesh.Shapes.assign(static_cast<std::size_t>(cells), 0xFF);
+  mesh.Materials.assign(static_cast<std::size_t>(cells), 0xFFFF);
+  status = tessellator.WriteCells(
+    mesh.Connectivity.data(), mesh.Shapes.data(), mesh.Materials.data(), executor);
   if (!status.IsOk())
   {
     return status;
+  }
+  mesh.Offsets.assign(static_cast<std::size_t>(cells) + 1, 0);
+  for (std::int64_t cell = 0; cell < cells; ++cell)
+  {
+    const int shape = mesh.Shapes[cell];
+    mesh.Offsets[cell + 1] =
+      mesh.Offsets[cell] + (shape >= 1 && shape <= D ? stm::CellPointCount(D, shape) : 0);
   }
   stm::LatticeIndex<D> unset;
   unset.fill(-1);
@@ -337,6 +377,14 @@ stm::Status TessellateTree(const stm::Spacetree<D>& tree,
   return tessellator.VisitPoints(visit, executor);
 }
 
+template <int D, class Executor>
+stm::Status TessellateTree(const stm::Spacetree<D>& tree,
+  const stm::SpacetreeTessellationOptions& options, Executor& executor, TessellationMesh<D>& mesh)
+{
+  stm::SpacetreeTessellator<D> tessellator;
+  return TessellateTree<D>(tree, options, executor, mesh, tessellator);
+}
+
 /// Exact floating-point equality that prints both values in full when they differ (gtest's
 /// EXPECT_EQ prints 63.999999999999631 as 64).
 inline ::testing::AssertionResult ExactlyEqual(double actual, double expected)
@@ -349,8 +397,8 @@ inline ::testing::AssertionResult ExactlyEqual(double actual, double expected)
                                        << expected << " (difference " << actual - expected << ")";
 }
 
-/// CheckSimplicialMesh sums exact determinants and divides once, so its volumes and boundary
-/// measures of lattice meshes are exact: the checker's values must equal the integer references.
+/// CheckCellMesh sums exact determinants and divides once, so its volumes and boundary measures
+/// of lattice meshes are exact: the checker's values must equal the integer references.
 constexpr double CheckerRelativeTolerance = 0.0;
 
 inline ::testing::AssertionResult CheckerMeasureMatches(double checkerValue, double exactValue)
@@ -365,10 +413,10 @@ inline ::testing::AssertionResult CheckerMeasureMatches(double checkerValue, dou
 }
 
 template <int D>
-stm::MeshInvariantReport CheckMesh(const SimplicialMesh<D>& mesh)
+stm::MeshInvariantReport CheckMesh(const TessellationMesh<D>& mesh)
 {
   const std::vector<std::int64_t> materials = mesh.MaterialsAsInt64();
-  return stm::CheckSimplicialMesh<D>(mesh.Coordinates(), mesh.Connectivity, &materials);
+  return stm::CheckCellMesh<D>(mesh.Coordinates(), mesh.Connectivity, mesh.Shapes, &materials);
 }
 
 /// Determinant by the Leibniz formula: a sum over permutations with the sign from the
@@ -420,6 +468,7 @@ struct ExactMeasures
 {
   std::map<std::int64_t, std::int64_t> ScaledVolumePerMaterial;
   std::int64_t ScaledTotalVolume = 0;
+  /// Simplices of the cells' Kuhn decompositions (all of a simplex) with volume <= 0.
   std::int64_t NonPositiveSimplices = 0;
   std::int64_t BoundaryFacets = 0;
   /// Boundary facets that do not lie in a plane orthogonal to an axis; the boundary of a union
@@ -428,57 +477,152 @@ struct ExactMeasures
   std::int64_t ScaledBoundaryMeasure = 0;
 };
 
+/// Calls visit(simplex, sign) for the simplices of the Kuhn decomposition of a cone with
+/// `apexes` apexes over a cube of dimension `cube` (points: apexes, then corners in code order):
+/// the monotone corner paths, then the apexes; sign is that of the axis permutation, so that
+/// sign times the simplex's volume is positive for a positively oriented cell.
+template <int D, class Visitor>
+void ForEachKuhnPiece(const stm::LatticeIndex<D>* points, int apexes, int cube, Visitor&& visit)
+{
+  std::array<int, D> axes{};
+  std::iota(axes.begin(), axes.begin() + cube, 0);
+  std::array<stm::LatticeIndex<D>, D + 1> simplex{};
+  do
+  {
+    int corner = 0, inversions = 0;
+    simplex[0] = points[apexes];
+    // (The bounds by D tell the compiler what the callers guarantee.)
+    for (int step = 0; step < cube && step < D; ++step)
+    {
+      corner |= 1 << axes[step];
+      simplex[step + 1] = points[apexes + corner];
+      for (int later = step + 1; later < cube && later < D; ++later)
+      {
+        inversions += axes[step] > axes[later];
+      }
+    }
+    for (int apex = 0; apex < apexes && cube + 1 + apex <= D; ++apex)
+    {
+      simplex[cube + 1 + apex] = points[apex];
+    }
+    visit(static_cast<const std::array<stm::LatticeIndex<D>, D + 1>&>(simplex),
+      inversions % 2 == 0 ? 1 : -1);
+  } while (std::next_permutation(axes.begin(), axes.begin() + cube));
+}
+
 template <int D>
-ExactMeasures ComputeExactMeasures(const SimplicialMesh<D>& mesh)
+ExactMeasures ComputeExactMeasures(const TessellationMesh<D>& mesh)
 {
   ExactMeasures measures;
-  std::vector<std::array<std::int64_t, D>> facets;
-  for (std::int64_t simplex = 0; simplex < mesh.GetNumberOfSimplices(); ++simplex)
+  // Facets as sorted point id lists (padded with -1), with their structure (apex count, cube
+  // dimension, points in cell order) kept for the boundary measure.
+  constexpr int maxFacetPoints = D == 1 ? 1 : (1 << (D - 1));
+  struct Facet
   {
-    std::array<stm::LatticeIndex<D>, D + 1> vertices;
-    for (int corner = 0; corner <= D; ++corner)
+    std::array<std::int64_t, maxFacetPoints> Key;
+    std::array<std::int64_t, maxFacetPoints> Ids;
+    int Apexes;
+    int Cube;
+    bool operator<(const Facet& other) const { return this->Key < other.Key; }
+  };
+  std::vector<Facet> facets;
+  for (std::int64_t cell = 0; cell < mesh.GetNumberOfCells(); ++cell)
+  {
+    const int shape = mesh.Shapes[cell];
+    const int apexes = D - shape;
+    const int size = mesh.GetCellSize(cell);
+    std::array<std::int64_t, (1 << D)> ids{};
+    std::array<stm::LatticeIndex<D>, (1 << D)> points{};
+    for (int i = 0; i < size && i < (1 << D); ++i)
     {
-      vertices[corner] = mesh.Vertex(simplex, corner);
+      ids[i] = mesh.CellPointId(cell, i);
+      points[i] = mesh.HalfUnitPoints[ids[i]];
     }
-    const std::int64_t volume = ScaledSignedVolume<D>(vertices);
-    measures.NonPositiveSimplices += volume <= 0;
-    measures.ScaledVolumePerMaterial[mesh.Materials[simplex]] += volume;
-    measures.ScaledTotalVolume += volume;
-    for (int skipped = 0; skipped <= D; ++skipped)
-    {
-      std::array<std::int64_t, D> facet;
-      int next = 0;
-      for (int corner = 0; corner <= D; ++corner)
+    ForEachKuhnPiece<D>(points.data(), apexes, shape,
+      [&](const std::array<stm::LatticeIndex<D>, D + 1>& simplex, int sign)
       {
-        if (corner != skipped)
+        const std::int64_t volume = sign * ScaledSignedVolume<D>(simplex);
+        measures.NonPositiveSimplices += volume <= 0;
+        measures.ScaledVolumePerMaterial[mesh.Materials[cell]] += volume;
+        measures.ScaledTotalVolume += volume;
+      });
+    // Facets of the cone A * Q: (A minus one apex) * Q, and A * (each facet of the cube Q),
+    // where the facets of a 1-cube are its end points.
+    Facet facet;
+    int count = 0;
+    auto addFacet = [&](int facetApexes, int facetCube)
+    {
+      facet.Apexes = facetApexes;
+      facet.Cube = facetCube;
+      facet.Key.fill(-1);
+      for (int i = 0; i < count && i < maxFacetPoints; ++i) // insertion sort
+      {
+        int j = i;
+        for (; j > 0 && facet.Key[j - 1] > facet.Ids[i]; --j)
         {
-          facet[next++] = mesh.Connectivity[simplex * (D + 1) + corner];
+          facet.Key[j] = facet.Key[j - 1];
+        }
+        facet.Key[j] = facet.Ids[i];
+      }
+      facets.push_back(facet);
+    };
+    for (int skipped = 0; skipped < apexes; ++skipped)
+    {
+      count = 0;
+      for (int i = 0; i < size; ++i)
+      {
+        if (i != skipped)
+        {
+          facet.Ids[count++] = ids[i];
         }
       }
-      std::sort(facet.begin(), facet.end());
-      facets.push_back(facet);
+      addFacet(apexes - 1, shape);
+    }
+    for (int axis = 0; axis < shape; ++axis)
+    {
+      for (int side = 0; side < 2; ++side)
+      {
+        count = 0;
+        for (int i = 0; i < apexes; ++i)
+        {
+          facet.Ids[count++] = ids[i];
+        }
+        for (int corner = 0; corner < (1 << shape); ++corner)
+        {
+          if (((corner >> axis) & 1) == side)
+          {
+            facet.Ids[count++] = ids[apexes + corner];
+          }
+        }
+        addFacet(apexes, shape - 1);
+      }
     }
   }
   std::sort(facets.begin(), facets.end());
   for (std::size_t first = 0; first < facets.size();)
   {
     std::size_t last = first + 1;
-    while (last < facets.size() && facets[last] == facets[first])
+    while (last < facets.size() && facets[last].Key == facets[first].Key)
     {
       ++last;
     }
     if (last - first == 1)
     {
       ++measures.BoundaryFacets;
-      const auto& facet = facets[first];
+      const Facet& facet = facets[first];
+      const int size = facet.Apexes + (1 << facet.Cube);
+      std::array<stm::LatticeIndex<D>, maxFacetPoints> points;
+      for (int i = 0; i < size; ++i)
+      {
+        points[i] = mesh.HalfUnitPoints[facet.Ids[i]];
+      }
       int normalAxis = -1;
       for (int axis = 0; axis < D && normalAxis < 0; ++axis)
       {
         bool flat = true;
-        for (int corner = 1; corner < D; ++corner)
+        for (int i = 1; i < size; ++i)
         {
-          flat =
-            flat && mesh.HalfUnitPoints[facet[corner]][axis] == mesh.HalfUnitPoints[facet[0]][axis];
+          flat = flat && points[i][axis] == points[0][axis];
         }
         normalAxis = flat ? axis : -1;
       }
@@ -488,22 +632,26 @@ ExactMeasures ComputeExactMeasures(const SimplicialMesh<D>& mesh)
       }
       else
       {
-        // The facet's measure is that of its projection along the normal axis.
-        std::array<std::array<std::int64_t, D - 1>, D - 1> edges;
-        for (int row = 0; row < D - 1; ++row)
-        {
-          int column = 0;
-          for (int axis = 0; axis < D; ++axis)
+        // The facet's measure is that of its projection along the normal axis, summed over its
+        // Kuhn simplices (a cone over a 0-cube is one simplex).
+        ForEachKuhnPiece<D>(points.data(), facet.Apexes, facet.Cube,
+          [&](const std::array<stm::LatticeIndex<D>, D + 1>& simplex, int)
           {
-            if (axis != normalAxis)
+            std::array<std::array<std::int64_t, D - 1>, D - 1> edges;
+            for (int row = 0; row < D - 1; ++row)
             {
-              edges[row][column++] =
-                mesh.HalfUnitPoints[facet[row + 1]][axis] - mesh.HalfUnitPoints[facet[0]][axis];
+              int column = 0;
+              for (int axis = 0; axis < D; ++axis)
+              {
+                if (axis != normalAxis)
+                {
+                  edges[row][column++] = simplex[row + 1][axis] - simplex[0][axis];
+                }
+              }
             }
-          }
-        }
-        const std::int64_t measure = LeibnizDeterminant<D - 1>(edges);
-        measures.ScaledBoundaryMeasure += measure < 0 ? -measure : measure;
+            const std::int64_t measure = LeibnizDeterminant<D - 1>(edges);
+            measures.ScaledBoundaryMeasure += measure < 0 ? -measure : measure;
+          });
       }
     }
     first = last;
@@ -650,7 +798,7 @@ std::int64_t ScaledVoxelFace()
 
 /// Point ids must follow the lattice order of the half-unit points, each visited exactly once.
 template <int D>
-void ExpectPointsInLatticeOrder(const SimplicialMesh<D>& mesh, const stm::Spacetree<D>& tree)
+void ExpectPointsInLatticeOrder(const TessellationMesh<D>& mesh, const stm::Spacetree<D>& tree)
 {
   stm::LatticeIndex<D> pointDims;
   for (int axis = 0; axis < D; ++axis)
@@ -679,21 +827,24 @@ void ExpectPointsInLatticeOrder(const SimplicialMesh<D>& mesh, const stm::Spacet
     << "VisitPoints must report every point exactly once";
 }
 
-/// Everything the mesh of a body must satisfy, against the voxel image it came from.
+/// Everything the mesh of a body (simplicial or hybrid output) must satisfy, against the voxel
+/// image it came from.
 template <int D>
 void ExpectMeshMatchesVoxelModel(
-  const SimplicialMesh<D>& mesh, const stm::Spacetree<D>& tree, const LabelImage<D>& image)
+  const TessellationMesh<D>& mesh, const stm::Spacetree<D>& tree, const LabelImage<D>& image)
 {
   const stm::MeshInvariantReport report = CheckMesh<D>(mesh);
   EXPECT_TRUE(report.IsValid()) << report.Summary();
-  EXPECT_EQ(report.NumberOfCells, mesh.GetNumberOfSimplices());
+  EXPECT_EQ(report.NumberOfCells, mesh.GetNumberOfCells());
   EXPECT_EQ(report.NumberOfPoints, mesh.GetNumberOfPoints());
   EXPECT_EQ(std::count(mesh.Connectivity.begin(), mesh.Connectivity.end(), -1), 0)
     << "connectivity entries were not written";
+  EXPECT_EQ(mesh.Offsets.back(), static_cast<std::int64_t>(mesh.Connectivity.size()))
+    << "shapes do not match the connectivity size";
   ExpectPointsInLatticeOrder<D>(mesh, tree);
 
   const ExactMeasures exact = ComputeExactMeasures<D>(mesh);
-  EXPECT_EQ(exact.NonPositiveSimplices, 0) << "WriteSimplices must orient every simplex";
+  EXPECT_EQ(exact.NonPositiveSimplices, 0) << "WriteCells must orient every cell";
   const std::int64_t latticeCellsPerVoxel = stm::NumberOfLatticeCells<D>(tree.VoxelSubdivision);
   std::map<std::int64_t, std::int64_t> expectedVolumes;
   for (stm::MaterialIndex material = 1; material <= image.LargestMaterial(); ++material)

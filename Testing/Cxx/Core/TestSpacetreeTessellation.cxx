@@ -439,9 +439,9 @@ TYPED_TEST(SpacetreeTessellationTest, RegularLeafTablesAgreeWithTheGeneralConstr
         {
           continue;
         }
-        scratch.Simplices.clear();
+        scratch.LeafCells.Clear();
         tessellator.TessellateLeaf(leaf, scratch);
-        stm::SpacetreeTessellator<D>::Orient(scratch.Simplices);
+        stm::SpacetreeTessellator<D>::Orient(scratch.LeafCells);
         std::vector<stm::LatticeIndex<D>> fromTable;
         for (std::uint8_t code : tessellator.RegularCellSimplices(leaf))
         {
@@ -452,7 +452,7 @@ TYPED_TEST(SpacetreeTessellationTest, RegularLeafTablesAgreeWithTheGeneralConstr
           }
           fromTable.push_back(corner);
         }
-        tableMismatches += fromTable != scratch.Simplices;
+        tableMismatches += fromTable != scratch.LeafCells.Points;
       }
       EXPECT_EQ(misclassified, 0);
       EXPECT_EQ(tableMismatches, 0);
@@ -503,7 +503,7 @@ TYPED_TEST(SpacetreeTessellationTest, SimplexDeterminantIsTheExactDeterminant)
 
     // Orient must make a non-degenerate simplex positive by reordering its points only.
     std::vector<stm::LatticeIndex<D>> buffer(points.begin(), points.end());
-    stm::SpacetreeTessellator<D>::Orient(buffer);
+    stm::SpacetreeTessellator<D>::OrientSimplices(buffer);
     std::array<stm::LatticeIndex<D>, D + 1> oriented;
     std::copy(buffer.begin(), buffer.end(), oriented.begin());
     wrong += ScaledSignedVolume<D>(oriented) != (expected < 0 ? -expected : expected);

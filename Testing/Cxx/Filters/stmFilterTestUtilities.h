@@ -14,6 +14,7 @@
 #include "vtkCellData.h"
 #include "vtkCellTypes.h"
 #include "vtkDataArray.h"
+#include "vtkIdList.h"
 #include "vtkImageData.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
@@ -106,8 +107,45 @@ struct Pipeline
   }
 };
 
-/// Runs the core invariant checks on a VTK simplicial mesh. Coordinates are projected on the
-/// given axes (for 2D meshes, the plane's axes).
+/// Shape (1 simplex .. Dim cube, see stm::CheckCellMesh) of a VTK cell type in dimension Dim,
+/// and the order in which its VTK points give the checker's connectivity: apexes first, then
+/// the cube corners in code order. Shape 0 for a cell type that does not belong there.
+template <int Dim>
+int CellShape(int cellType, std::vector<int>& order)
+{
+  order.clear();
+  if (Dim == 2 && cellType == VTK_TRIANGLE)
+  {
+    order = { 0, 1, 2 };
+    return 1;
+  }
+  if (Dim == 2 && cellType == VTK_QUAD)
+  {
+    order = { 0, 1, 3, 2 };
+    return 2;
+  }
+  if (Dim == 3 && cellType == VTK_TETRA)
+  {
+    order = { 0, 1, 2, 3 };
+    return 1;
+  }
+  if (Dim == 3 && cellType == VTK_PYRAMID)
+  {
+    order = { 4, 0, 1, 3, 2 };
+    return 2;
+  }
+  if (Dim == 3 && cellType == VTK_HEXAHEDRON)
+  {
+    order = { 0, 1, 3, 2, 4, 5, 7, 6 };
+    return 3;
+  }
+  return 0;
+}
+
+/// Runs the core invariant checks on a VTK mesh of simplices, cubes (quads, hexahedra) and
+/// pyramids. Coordinates are projected on the given axes (for 2D meshes, the plane's axes).
+/// A mesh of simplices only goes through CheckSimplicialMesh (less memory), any other through
+/// CheckCellMesh; a cell of another type counts as invalid.
 template <int Dim>
 stm::MeshInvariantReport CheckMesh(vtkUnstructuredGrid* mesh, const int axes[Dim], double tolerance)
 {
@@ -123,19 +161,35 @@ stm::MeshInvariantReport CheckMesh(vtkUnstructuredGrid* mesh, const int axes[Dim
   }
   std::vector<std::int64_t> cells;
   cells.reserve(static_cast<std::size_t>(mesh->GetNumberOfCells()) * (Dim + 1));
+  std::vector<std::uint8_t> shapes;
+  shapes.reserve(static_cast<std::size_t>(mesh->GetNumberOfCells()));
   std::vector<std::int64_t> materials;
+  materials.reserve(static_cast<std::size_t>(mesh->GetNumberOfCells()));
   vtkDataArray* material = mesh->GetCellData()->GetArray("Material");
   vtkNew<vtkIdList> ids;
+  std::vector<int> order;
+  bool simplicial = true;
   for (vtkIdType c = 0; c < mesh->GetNumberOfCells(); ++c)
   {
     mesh->GetCellPoints(c, ids);
-    for (vtkIdType v = 0; v < ids->GetNumberOfIds(); ++v)
+    int shape = CellShape<Dim>(mesh->GetCellType(c), order);
+    if (shape > 0 && static_cast<vtkIdType>(order.size()) != ids->GetNumberOfIds())
     {
-      cells.push_back(ids->GetId(v));
+      shape = 0;
+    }
+    simplicial = simplicial && shape == 1;
+    shapes.push_back(static_cast<std::uint8_t>(shape));
+    for (std::size_t v = 0; shape > 0 && v < order.size(); ++v)
+    {
+      cells.push_back(ids->GetId(order[v]));
     }
     materials.push_back(material ? static_cast<std::int64_t>(material->GetComponent(c, 0)) : 0);
   }
-  return stm::CheckSimplicialMesh<Dim>(points, cells, &materials, tolerance);
+  if (simplicial)
+  {
+    return stm::CheckSimplicialMesh<Dim>(points, cells, &materials, tolerance);
+  }
+  return stm::CheckCellMesh<Dim>(points, cells, shapes, &materials, tolerance);
 }
 
 } // namespace stmTest
