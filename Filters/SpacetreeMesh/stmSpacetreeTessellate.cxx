@@ -172,7 +172,7 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   }
   const std::int64_t cells = tessellator.GetNumberOfCells();
   const std::int64_t numberOfPoints = tessellator.GetNumberOfPoints();
-  insertedPoints = tessellator.CountInsertedPoints();
+  insertedPoints = tessellator.CountInsertedPoints(executor);
 
   // Points.
   vtkNew<vtkPoints> points;

@@ -43,6 +43,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <numeric>
@@ -564,12 +565,18 @@ public:
   }
 
   /// Points that are not corners of leaves: the face and cell centres the tessellation added.
+  template <class Executor>
+  std::int64_t CountInsertedPoints(Executor& executor) const
+  {
+    std::atomic<std::int64_t> inserted{ 0 };
+    InsertedPointKernel kernel{ this, &inserted };
+    executor.For(0, this->PointSet.GetNumberOfWords(), 4096, kernel);
+    return inserted.load();
+  }
   std::int64_t CountInsertedPoints() const
   {
-    std::int64_t inserted = 0;
-    this->PointSet.VisitSetBits(0, this->PointSet.GetNumberOfWords(),
-      [&](std::int64_t, const Point& point) { inserted += !this->IsLeafVertex(point); });
-    return inserted;
+    SequentialExecutor executor;
+    return this->CountInsertedPoints(executor);
   }
 
   /// Whether a leaf belongs to the output.
@@ -634,7 +641,15 @@ public:
     Point* points = cells.Points.data();
     for (std::uint8_t shape : cells.Shapes)
     {
-      if (CellDeterminant<Dim>(points, shape) < 0)
+      if (shape == 1)
+      {
+        // A simplex: CellDeterminant has the sign of the stored order's determinant.
+        if (SimplexDeterminant<Dim>(points) < 0)
+        {
+          std::swap(points[Dim - 1], points[Dim]);
+        }
+      }
+      else if (CellDeterminant<Dim>(points, shape) < 0)
       {
         // Mirror the cube along its first axis.
         Point* corners = points + (Dim - shape);
@@ -894,6 +909,20 @@ private:
     {
       this->ForEachChildFace(
         face, [&](const Face& child) { this->Triangulate(child, out, scratch); });
+      return;
+    }
+    if ((face.FreeAxes & (face.FreeAxes - 1u)) == 0)
+    {
+      // An unsplit edge, the most frequent face: its two end points.
+      const Point first = HalfUnits(face.Anchor);
+      Point second = first;
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        second[axis] += (face.FreeAxes & (1u << axis)) ? 2 * this->Size(face)[axis] : 0;
+      }
+      out.Points.push_back(first);
+      out.Points.push_back(second);
+      out.Shapes.push_back(1);
       return;
     }
     this->TriangulateUnsplit(face, out, scratch);
@@ -1441,6 +1470,20 @@ private:
       }
       this->Exec->ReportProgress(
         0.5 + 0.4 * static_cast<double>(end) / this->Self->Tree->GetNumberOfLeaves());
+    }
+  };
+
+  struct InsertedPointKernel
+  {
+    using Scratch = NoScratch;
+    const SpacetreeTessellator* Self;
+    std::atomic<std::int64_t>* Inserted;
+    void operator()(NoScratch&, std::int64_t begin, std::int64_t end) const
+    {
+      std::int64_t inserted = 0;
+      this->Self->PointSet.VisitSetBits(begin, end,
+        [&](std::int64_t, const Point& point) { inserted += !this->Self->IsLeafVertex(point); });
+      *this->Inserted += inserted;
     }
   };
 

@@ -176,6 +176,31 @@ std::string RuleName(stm::TemplateRule rule)
   }
 }
 
+/// Tessellates a tree with each template rule, checks each mesh against the voxel model, and
+/// returns the points each rule inserted.
+template <int D>
+std::map<stm::TemplateRule, std::int64_t> InsertedPointsPerRule(const stm::Spacetree<D>& tree,
+  const LabelImage<D>& image, stm::CellTemplate cellTemplate, stm::SequentialExecutor& executor)
+{
+  std::map<stm::TemplateRule, std::int64_t> inserted;
+  for (stm::TemplateRule rule : { stm::TemplateRule::MidpointEverywhere,
+         stm::TemplateRule::RegularFaces, stm::TemplateRule::Extended })
+  {
+    SCOPED_TRACE(TemplateName(cellTemplate) + ", " + RuleName(rule));
+    TessellationMesh<D> mesh;
+    stm::SpacetreeTessellator<D> tessellator;
+    const stm::Status status = TessellateTree<D>(tree,
+      Options(stm::TessellationOutput::Simplices, rule, cellTemplate), executor, mesh, tessellator);
+    EXPECT_TRUE(status.IsOk()) << status.GetMessage();
+    if (status.IsOk())
+    {
+      ExpectMeshMatchesVoxelModel<D>(mesh, tree, image);
+    }
+    inserted[rule] = tessellator.CountInsertedPoints();
+  }
+  return inserted;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Brute-force views of the leaves.
 
@@ -616,26 +641,14 @@ TEST(TessellationOutputs, ExtendedTemplatesCannotHelpASquareBetweenTwoFinerOnes)
     ASSERT_EQ(tree.GetNumberOfLeaves(), bothSides ? 9 : 6);
     for (stm::CellTemplate cellTemplate : TemplatesOf<D>())
     {
-      std::map<stm::TemplateRule, std::int64_t> inserted;
-      for (stm::TemplateRule rule : { stm::TemplateRule::MidpointEverywhere,
-             stm::TemplateRule::RegularFaces, stm::TemplateRule::Extended })
-      {
-        SCOPED_TRACE(TemplateName(cellTemplate) + ", " + RuleName(rule));
-        TessellationMesh<D> mesh;
-        stm::SpacetreeTessellator<D> tessellator;
-        ASSERT_TRUE(
-          TessellateTree<D>(tree, Options(stm::TessellationOutput::Simplices, rule, cellTemplate),
-            executor, mesh, tessellator)
-            .IsOk());
-        ExpectMeshMatchesVoxelModel<D>(mesh, tree, image);
-        inserted[rule] = tessellator.CountInsertedPoints();
-      }
+      const std::map<stm::TemplateRule, std::int64_t> inserted =
+        InsertedPointsPerRule<D>(tree, image, cellTemplate, executor);
       SCOPED_TRACE(TemplateName(cellTemplate));
       // MidpointEverywhere: one centre per leaf.
-      EXPECT_EQ(inserted[stm::TemplateRule::MidpointEverywhere], tree.GetNumberOfLeaves());
+      EXPECT_EQ(inserted.at(stm::TemplateRule::MidpointEverywhere), tree.GetNumberOfLeaves());
       // Only the middle square is irregular.
-      EXPECT_EQ(inserted[stm::TemplateRule::RegularFaces], 1);
-      EXPECT_EQ(inserted[stm::TemplateRule::Extended], bothSides ? 1 : 0);
+      EXPECT_EQ(inserted.at(stm::TemplateRule::RegularFaces), 1);
+      EXPECT_EQ(inserted.at(stm::TemplateRule::Extended), bothSides ? 1 : 0);
     }
   }
 }
@@ -805,24 +818,12 @@ TEST(TessellationOutputs, OneVertexOnTheMiddleEdgeOfATwoByOneByTwoBlock)
 
   for (stm::CellTemplate cellTemplate : TemplatesOf<D>())
   {
-    std::map<stm::TemplateRule, std::int64_t> inserted;
-    for (stm::TemplateRule rule : { stm::TemplateRule::MidpointEverywhere,
-           stm::TemplateRule::RegularFaces, stm::TemplateRule::Extended })
-    {
-      SCOPED_TRACE(TemplateName(cellTemplate) + ", " + RuleName(rule));
-      TessellationMesh<D> mesh;
-      stm::SpacetreeTessellator<D> tessellator;
-      ASSERT_TRUE(
-        TessellateTree<D>(tree, Options(stm::TessellationOutput::Simplices, rule, cellTemplate),
-          executor, mesh, tessellator)
-          .IsOk());
-      ExpectMeshMatchesVoxelModel<D>(mesh, tree, image);
-      inserted[rule] = tessellator.CountInsertedPoints();
-    }
+    const std::map<stm::TemplateRule, std::int64_t> inserted =
+      InsertedPointsPerRule<D>(tree, image, cellTemplate, executor);
     SCOPED_TRACE(TemplateName(cellTemplate));
-    EXPECT_EQ(inserted[stm::TemplateRule::MidpointEverywhere], 61);
-    EXPECT_EQ(inserted[stm::TemplateRule::RegularFaces], 11);
-    EXPECT_EQ(inserted[stm::TemplateRule::Extended], 0);
+    EXPECT_EQ(inserted.at(stm::TemplateRule::MidpointEverywhere), 61);
+    EXPECT_EQ(inserted.at(stm::TemplateRule::RegularFaces), 11);
+    EXPECT_EQ(inserted.at(stm::TemplateRule::Extended), 0);
   }
 }
 
