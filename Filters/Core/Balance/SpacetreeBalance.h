@@ -89,32 +89,6 @@ struct SpacetreeBalanceOptions
   }
 };
 
-/// The neighbour directions of a cell, each component in {-1, 0, 1}; all 3^Dim - 1 of them,
-/// or only the 2 Dim facet directions.
-template <int Dim>
-std::vector<LatticeIndex<Dim>> NeighborDirections(bool facetsOnly)
-{
-  std::vector<LatticeIndex<Dim>> directions;
-  for (int code = 0; code < IntPow(3, Dim); ++code)
-  {
-    LatticeIndex<Dim> direction;
-    int rest = code;
-    int nonZero = 0;
-    for (int axis = 0; axis < Dim; ++axis)
-    {
-      direction[axis] = rest % 3 - 1;
-      rest /= 3;
-      nonZero += direction[axis] != 0;
-    }
-    if (nonZero == 0 || (facetsOnly && nonZero != 1))
-    {
-      continue;
-    }
-    directions.push_back(direction);
-  }
-  return directions;
-}
-
 template <int Dim>
 class SpacetreeBalancer
 {
@@ -287,51 +261,6 @@ public:
   }
 };
 
-/// Calls visit(cell) for every lattice cell outside a leaf that touches it (over a facet, or
-/// over any face unless facetsOnly), within the lattice.
-template <int Dim, class Visitor>
-void ForEachAdjacentCell(const Spacetree<Dim>& tree, const LevelMap<Dim>& map, std::int64_t leaf,
-  const std::vector<LatticeIndex<Dim>>& directions, Visitor&& visit)
-{
-  const LatticeIndex<Dim> size = tree.GetCellSize(tree.LeafLevels[leaf]);
-  const auto& anchor = tree.LeafAnchors[leaf];
-  for (const auto& direction : directions)
-  {
-    LatticeIndex<Dim> lo, hi;
-    bool inside = true;
-    for (int axis = 0; axis < Dim; ++axis)
-    {
-      lo[axis] = direction[axis] < 0 ? anchor[axis] - 1
-        : direction[axis] > 0        ? anchor[axis] + size[axis]
-                                     : anchor[axis];
-      hi[axis] = direction[axis] == 0 ? anchor[axis] + size[axis] : lo[axis] + 1;
-      inside = inside && lo[axis] >= 0 && hi[axis] <= map.GetDimensions()[axis];
-    }
-    if (!inside)
-    {
-      continue;
-    }
-    LatticeIndex<Dim> cell = lo;
-    for (;;)
-    {
-      visit(static_cast<const LatticeIndex<Dim>&>(cell));
-      int axis = 0;
-      for (; axis < Dim; ++axis)
-      {
-        if (++cell[axis] < hi[axis])
-        {
-          break;
-        }
-        cell[axis] = lo[axis];
-      }
-      if (axis == Dim)
-      {
-        break;
-      }
-    }
-  }
-}
-
 /// The largest level difference between adjacent leaves; 0 for a uniform tree.
 template <int Dim, class Executor>
 int MaximumLevelDifference(const Spacetree<Dim>& tree, bool facetsOnly, Executor& executor)
@@ -346,7 +275,7 @@ int MaximumLevelDifference(const Spacetree<Dim>& tree, bool facetsOnly, Executor
   for (std::int64_t leaf = 0; leaf < tree.GetNumberOfLeaves(); ++leaf)
   {
     const int level = tree.LeafLevels[leaf];
-    ForEachAdjacentCell<Dim>(tree, map, leaf, directions,
+    ForEachAdjacentCell<Dim>(tree, leaf, directions,
       [&](const LatticeIndex<Dim>& cell)
       {
         const int difference = map.LevelAt(cell) - level;
@@ -374,7 +303,7 @@ std::int64_t CountBalanceViolations(
     const int level = tree.LeafLevels[leaf];
     const int local = options.LocalLevel<Dim>(
       tree.LeafAnchors[leaf], tree.GetCellSize(level), tree.LeafMaterials[leaf]);
-    ForEachAdjacentCell<Dim>(tree, map, leaf, directions,
+    ForEachAdjacentCell<Dim>(tree, leaf, directions,
       [&](const LatticeIndex<Dim>& cell)
       {
         const int neighborLevel = map.LevelAt(cell);

@@ -114,42 +114,29 @@ private:
     }
     // One sample per level-`coarse` grid cell that meets the box: a leaf of level <= coarse
     // covers the whole grid cell.
-    LatticeIndex<Dim> first, cell;
+    LatticeIndex<Dim> first;
     for (int axis = 0; axis < Dim; ++axis)
     {
       first[axis] = lo[axis] - lo[axis] % radius[axis];
     }
-    cell = first;
-    for (;;)
-    {
-      LatticeIndex<Dim> sample;
-      for (int axis = 0; axis < Dim; ++axis)
+    ForEachLatticePoint<Dim>(first, hi, radius,
+      [&](const LatticeIndex<Dim>& cell)
       {
-        sample[axis] = std::max(cell[axis], lo[axis]);
-      }
-      for (int sampleLevel = map.LevelAt(sample); sampleLevel <= coarse;
-           sampleLevel = map.LevelAt(sample))
-      {
-        const LatticeIndex<Dim> leafAnchor = map.AnchorOf(sample, sampleLevel);
-        map.Split(leafAnchor, sampleLevel);
-        tree.ForEachChild(leafAnchor, sampleLevel,
-          [&](const LatticeIndex<Dim>& child) { leavesByLevel[sampleLevel + 1].push_back(child); });
-      }
-      int axis = 0;
-      for (; axis < Dim; ++axis)
-      {
-        cell[axis] += radius[axis];
-        if (cell[axis] < hi[axis])
+        LatticeIndex<Dim> sample;
+        for (int axis = 0; axis < Dim; ++axis)
         {
-          break;
+          sample[axis] = std::max(cell[axis], lo[axis]);
         }
-        cell[axis] = first[axis];
-      }
-      if (axis == Dim)
-      {
-        return;
-      }
-    }
+        for (int sampleLevel = map.LevelAt(sample); sampleLevel <= coarse;
+             sampleLevel = map.LevelAt(sample))
+        {
+          const LatticeIndex<Dim> leafAnchor = map.AnchorOf(sample, sampleLevel);
+          map.Split(leafAnchor, sampleLevel);
+          tree.ForEachChild(leafAnchor, sampleLevel,
+            [&](const LatticeIndex<Dim>& child)
+            { leavesByLevel[sampleLevel + 1].push_back(child); });
+        }
+      });
   }
 };
 

@@ -8,6 +8,8 @@
 
 #include <array>
 #include <cstdint>
+#include <type_traits>
+#include <utility>
 
 namespace stm
 {
@@ -86,6 +88,62 @@ inline std::int64_t LinearIndex(const LatticeIndex<Dim>& index, const LatticeInd
     linear = linear * dims[axis] + index[axis];
   }
   return linear;
+}
+
+/// Calls visit(point) for the points lower + i * step (i >= 0 per axis) of the box
+/// [lower, upper), in lattice order (axis 0 fastest). A visitor that returns bool stops the walk
+/// by returning false. Returns false if it was stopped, true otherwise (also for an empty box).
+template <int Dim, class Visitor>
+bool ForEachLatticePoint(const LatticeIndex<Dim>& lower, const LatticeIndex<Dim>& upper,
+  const LatticeIndex<Dim>& step, Visitor&& visit)
+{
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    if (upper[axis] <= lower[axis])
+    {
+      return true;
+    }
+  }
+  LatticeIndex<Dim> point = lower;
+  for (;;)
+  {
+    const LatticeIndex<Dim>& current = point;
+    if constexpr (std::is_same_v<decltype(visit(current)), bool>)
+    {
+      if (!visit(current))
+      {
+        return false;
+      }
+    }
+    else
+    {
+      visit(current);
+    }
+    int axis = 0;
+    for (; axis < Dim; ++axis)
+    {
+      point[axis] += step[axis];
+      if (point[axis] < upper[axis])
+      {
+        break;
+      }
+      point[axis] = lower[axis];
+    }
+    if (axis == Dim)
+    {
+      return true;
+    }
+  }
+}
+
+/// ForEachLatticePoint with unit steps: every lattice point of [lower, upper).
+template <int Dim, class Visitor>
+bool ForEachLatticePoint(
+  const LatticeIndex<Dim>& lower, const LatticeIndex<Dim>& upper, Visitor&& visit)
+{
+  LatticeIndex<Dim> unit;
+  unit.fill(1);
+  return ForEachLatticePoint<Dim>(lower, upper, unit, std::forward<Visitor>(visit));
 }
 
 template <int Dim>

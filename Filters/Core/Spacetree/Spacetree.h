@@ -40,29 +40,15 @@ template <int Dim, class Visitor>
 void ForEachChildAnchor(const LatticeIndex<Dim>& anchor, const LatticeIndex<Dim>& size,
   const LatticeIndex<Dim>& childSize, unsigned freeAxes, Visitor&& visit)
 {
-  LatticeIndex<Dim> child = anchor;
-  for (;;)
+  LatticeIndex<Dim> upper, step;
+  for (int axis = 0; axis < Dim; ++axis)
   {
-    visit(static_cast<const LatticeIndex<Dim>&>(child));
-    int axis = 0;
-    for (; axis < Dim; ++axis)
-    {
-      if (!(freeAxes & (1u << axis)))
-      {
-        continue;
-      }
-      child[axis] += childSize[axis];
-      if (child[axis] < anchor[axis] + size[axis])
-      {
-        break;
-      }
-      child[axis] = anchor[axis];
-    }
-    if (axis == Dim)
-    {
-      return;
-    }
+    const bool free = (freeAxes & (1u << axis)) != 0;
+    upper[axis] = anchor[axis] + (free ? size[axis] : 1);
+    step[axis] = free ? childSize[axis] : 1;
   }
+  ForEachLatticePoint<Dim>(
+    anchor, upper, step, [&](const LatticeIndex<Dim>& child) { visit(child); });
 }
 
 template <int Dim>
@@ -215,6 +201,62 @@ public:
       this->LeafMaterials.end(), other.LeafMaterials.begin(), other.LeafMaterials.end());
   }
 };
+
+/// The neighbour directions of a cell, each component in {-1, 0, 1}; all 3^Dim - 1 of them,
+/// or only the 2 Dim facet directions.
+template <int Dim>
+std::vector<LatticeIndex<Dim>> NeighborDirections(bool facetsOnly)
+{
+  std::vector<LatticeIndex<Dim>> directions;
+  for (int code = 0; code < IntPow(3, Dim); ++code)
+  {
+    LatticeIndex<Dim> direction;
+    int rest = code;
+    int nonZero = 0;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      direction[axis] = rest % 3 - 1;
+      rest /= 3;
+      nonZero += direction[axis] != 0;
+    }
+    if (nonZero == 0 || (facetsOnly && nonZero != 1))
+    {
+      continue;
+    }
+    directions.push_back(direction);
+  }
+  return directions;
+}
+
+/// Calls visit(cell) for every lattice cell outside a leaf that touches it in one of the given
+/// directions (NeighborDirections), within the lattice. A visitor that returns bool stops the
+/// walk by returning false; returns false if it was stopped.
+template <int Dim, class Visitor>
+bool ForEachAdjacentCell(const Spacetree<Dim>& tree, std::int64_t leaf,
+  const std::vector<LatticeIndex<Dim>>& directions, Visitor&& visit)
+{
+  const LatticeIndex<Dim> size = tree.GetCellSize(tree.LeafLevels[leaf]);
+  const LatticeIndex<Dim> latticeDims = tree.GetLatticeDimensions();
+  const auto& anchor = tree.LeafAnchors[leaf];
+  for (const auto& direction : directions)
+  {
+    LatticeIndex<Dim> lo, hi;
+    bool inside = true;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      lo[axis] = direction[axis] < 0 ? anchor[axis] - 1
+        : direction[axis] > 0        ? anchor[axis] + size[axis]
+                                     : anchor[axis];
+      hi[axis] = direction[axis] == 0 ? anchor[axis] + size[axis] : lo[axis] + 1;
+      inside = inside && lo[axis] >= 0 && hi[axis] <= latticeDims[axis];
+    }
+    if (inside && !ForEachLatticePoint<Dim>(lo, hi, visit))
+    {
+      return false;
+    }
+  }
+  return true;
+}
 
 } // namespace stm
 

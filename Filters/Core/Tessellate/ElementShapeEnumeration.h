@@ -41,6 +41,36 @@
 namespace stm
 {
 
+/// A similarity invariant of a point set: its squared distances, sorted, divided by their
+/// greatest common divisor. Exact on integer points, independent of the points' order, of
+/// translation, of the lattice's symmetries and of scaling.
+template <int Dim>
+std::vector<std::int64_t> SimilarityKey(const LatticeIndex<Dim>* points, int count)
+{
+  std::vector<std::int64_t> key;
+  std::int64_t divisor = 0;
+  for (int a = 0; a < count; ++a)
+  {
+    for (int b = a + 1; b < count; ++b)
+    {
+      std::int64_t squared = 0;
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        const std::int64_t delta = points[b][axis] - points[a][axis];
+        squared += delta * delta;
+      }
+      key.push_back(squared);
+      divisor = std::gcd(divisor, squared);
+    }
+  }
+  for (auto& squared : key)
+  {
+    squared /= divisor;
+  }
+  std::sort(key.begin(), key.end());
+  return key;
+}
+
 struct ElementShapeEnumerationOptions
 {
   CellTemplate Template = CellTemplate::Checkerboard;
@@ -120,12 +150,7 @@ public:
   }
 
 private:
-  struct Face
-  {
-    LatticeIndex<Dim> Anchor;
-    int Level;
-    unsigned FreeAxes;
-  };
+  using Face = SpacetreeFace<Dim>;
 
   /// A cell with its points packed into one word each, in the tessellator's point order.
   struct Cell
@@ -394,17 +419,7 @@ private:
 
   Face Facet(const Face& face, int freeIndex, int side) const
   {
-    int axis = 0;
-    for (int seen = -1; axis < Dim; ++axis)
-    {
-      if ((face.FreeAxes & (1u << axis)) && ++seen == freeIndex)
-      {
-        break;
-      }
-    }
-    Face facet{ face.Anchor, face.Level, face.FreeAxes & ~(1u << axis) };
-    facet.Anchor[axis] += side * this->Sizes[face.Level][axis];
-    return facet;
+    return FacetOf<Dim>(face, this->Sizes[face.Level], freeIndex, side);
   }
 
   template <class Visitor>

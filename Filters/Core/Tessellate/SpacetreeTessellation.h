@@ -266,6 +266,34 @@ struct TessellationLevelTables
   }
 };
 
+/// A k-face of the spacetree: a box of the edges of Level at Anchor, spanning the axes set in
+/// FreeAxes.
+template <int Dim>
+struct SpacetreeFace
+{
+  LatticeIndex<Dim> Anchor;
+  int Level;
+  unsigned FreeAxes;
+};
+
+/// The facet of a face (edges size) across its free axis number freeIndex, on side 0 or 1.
+template <int Dim>
+SpacetreeFace<Dim> FacetOf(
+  const SpacetreeFace<Dim>& face, const LatticeIndex<Dim>& size, int freeIndex, int side)
+{
+  int axis = 0;
+  for (int seen = -1; axis < Dim; ++axis)
+  {
+    if ((face.FreeAxes & (1u << axis)) && ++seen == freeIndex)
+    {
+      break;
+    }
+  }
+  SpacetreeFace<Dim> facet{ face.Anchor, face.Level, face.FreeAxes & ~(1u << axis) };
+  facet.Anchor[axis] += side * size[axis];
+  return facet;
+}
+
 /// Corner c (bit i of c selects the far side along the i-th free axis) of a box of edges size
 /// (lattice units) spanning freeAxes, anchor and result in half units.
 template <int Dim>
@@ -376,14 +404,7 @@ public:
   using Point = LatticeIndex<Dim>; // in half lattice units
   using Cells = TessellationCells<Dim>;
 
-  /// A k-face of the spacetree: a box of the edges of Level at Anchor, spanning the axes set in
-  /// FreeAxes.
-  struct Face
-  {
-    LatticeIndex<Dim> Anchor;
-    int Level;
-    unsigned FreeAxes;
-  };
+  using Face = SpacetreeFace<Dim>;
 
   struct Scratch
   {
@@ -764,20 +785,9 @@ private:
     return BoxCorner<Dim>(HalfUnits(face.Anchor), this->Size(face), face.FreeAxes, c);
   }
 
-  /// The facet of a face across its free axis number freeIndex, on the given side.
   Face Facet(const Face& face, int freeIndex, int side) const
   {
-    int axis = 0;
-    for (int seen = -1; axis < Dim; ++axis)
-    {
-      if ((face.FreeAxes & (1u << axis)) && ++seen == freeIndex)
-      {
-        break;
-      }
-    }
-    Face facet{ face.Anchor, face.Level, face.FreeAxes & ~(1u << axis) };
-    facet.Anchor[axis] += side * this->Size(face)[axis];
-    return facet;
+    return FacetOf<Dim>(face, this->Size(face), freeIndex, side);
   }
 
   /// Whether a face at its canonical level is split by finer leaves.
@@ -1025,42 +1035,49 @@ private:
     return true;
   }
 
-  /// Whether the triangulation of a face is a cone from the given point (one of its corners).
-  bool IsConeFrom(Face face, const Point& apex) const
+  /// The corners (bit c for corner c) on the diagonals of a face's template: the
+  /// checkerboard's corners of even level-coordinate sum, Kuhn's first and last corner.
+  unsigned DiagonalCorners(const Face& face) const
+  {
+    const int corners = 1 << PopCount(face.FreeAxes);
+    if (this->Options.Template == CellTemplate::Kuhn)
+    {
+      return 1u | (1u << (corners - 1));
+    }
+    const int parity = this->Parity(face);
+    unsigned mask = 0;
+    for (int c = 0; c < corners; ++c)
+    {
+      if (((parity + PopCount(static_cast<unsigned>(c))) & 1) == 0)
+      {
+        mask |= 1u << c;
+      }
+    }
+    return mask;
+  }
+
+  /// The corners (bit c for corner c) from which the triangulation of a face is a cone.
+  unsigned ConeCorners(Face face) const
   {
     face.Level = this->CanonicalLevel(face.Level, face.FreeAxes);
     if (this->IsSplit(face))
     {
-      return false;
+      return 0u;
     }
     const int k = PopCount(face.FreeAxes);
     if (k == 1)
     {
-      return true;
+      return 3u;
     }
     if (this->TakesTemplate(face))
     {
-      if (this->Options.Template == CellTemplate::Kuhn)
-      {
-        // Every Kuhn simplex contains the corners 0 and 2^k - 1.
-        return apex == this->FaceCorner(face, 0) || apex == this->FaceCorner(face, (1u << k) - 1);
-      }
-      if (k != 2)
-      {
-        return false;
-      }
-      // The checkerboard square's diagonal joins its corners of even level-coordinate sum.
-      for (unsigned c = 0; c < 4; ++c)
-      {
-        if (apex == this->FaceCorner(face, c))
-        {
-          return ((this->Parity(face) + PopCount(c)) & 1) == 0;
-        }
-      }
-      return false;
+      // Every Kuhn simplex contains the first and last corner; the checkerboard square's
+      // diagonal joins its even corners; the checkerboard cube is no cone.
+      return this->Options.Template == CellTemplate::Kuhn || k == 2 ? this->DiagonalCorners(face)
+                                                                    : 0u;
     }
-    const int extended = this->ExtendedApex(face);
-    return extended >= 0 && apex == this->FaceCorner(face, extended);
+    const int apex = this->ExtendedApex(face);
+    return apex >= 0 ? 1u << apex : 0u;
   }
 
   /// The corner of an irregular unsplit face (canonical level, k >= 2) from which its
@@ -1071,7 +1088,7 @@ private:
   {
     const int k = PopCount(face.FreeAxes);
     const int corners = 1 << k;
-    // Facets by (freeIndex, side): shallow, and the corners they are cones from.
+    // Facets by (freeIndex, side): shallow, and the face's corners they are cones from.
     std::array<bool, 2 * Dim> shallow{};
     std::array<unsigned, 2 * Dim> coneCorners{};
     for (int freeIndex = 0; freeIndex < k; ++freeIndex)
@@ -1080,24 +1097,25 @@ private:
       {
         const Face facet = this->Facet(face, freeIndex, side);
         shallow[2 * freeIndex + side] = this->IsShallow(facet);
+        const unsigned facetCones = this->ConeCorners(facet);
+        const unsigned below = (1u << freeIndex) - 1u;
         for (int c = 0; c < corners; ++c)
         {
-          if (((c >> freeIndex) & 1) == side && this->IsConeFrom(facet, this->FaceCorner(face, c)))
+          // The facet's corner code: the face's without the bit of the facet's normal axis.
+          const unsigned facetCorner = (c & below) | ((c >> (freeIndex + 1)) << freeIndex);
+          if (((c >> freeIndex) & 1) == side && (facetCones >> facetCorner) & 1u)
           {
             coneCorners[2 * freeIndex + side] |= 1u << c;
           }
         }
       }
     }
-    const int parity = this->Parity(face);
+    const unsigned preferred = this->DiagonalCorners(face);
     for (int pass = 0; pass < 2; ++pass)
     {
       for (int c = 0; c < corners; ++c)
       {
-        const bool preferred = this->Options.Template == CellTemplate::Kuhn
-          ? (c == 0 || c == corners - 1)
-          : ((parity + PopCount(static_cast<unsigned>(c))) & 1) == 0;
-        if (preferred != (pass == 0))
+        if (((preferred >> c) & 1u) != (pass == 0 ? 1u : 0u))
         {
           continue;
         }
@@ -1136,8 +1154,6 @@ private:
     const Spacetree<Dim>& tree = *this->Tree;
     const std::int64_t leaves = tree.GetNumberOfLeaves();
     this->LayerLeaves.assign(static_cast<std::size_t>(leaves), 0);
-    // Lattice cells covered by the selection so far.
-    this->CoveredCells = LatticeBitset<Dim>(this->LatticeDimensions);
     std::vector<std::int64_t> added;
     for (std::int64_t leaf = 0; leaf < leaves; ++leaf)
     {
@@ -1146,25 +1162,13 @@ private:
         added.push_back(leaf);
       }
     }
+    LatticeBitset<Dim> covered(this->LatticeDimensions);
+    const std::vector<LatticeIndex<Dim>> directions = NeighborDirections<Dim>(false);
     for (int layer = 0; layer < this->Options.BoundaryLayers && !added.empty(); ++layer)
     {
-      for (std::int64_t leaf : added)
-      {
-        const LatticeIndex<Dim> anchor = tree.LeafAnchors[leaf];
-        const LatticeIndex<Dim> size = tree.GetCellSize(tree.LeafLevels[leaf]);
-        LatticeIndex<Dim> upper;
-        for (int axis = 0; axis < Dim; ++axis)
-        {
-          upper[axis] = anchor[axis] + size[axis];
-        }
-        ForEachLatticePoint(anchor, upper,
-          [&](const LatticeIndex<Dim>& cell)
-          {
-            this->CoveredCells.Set(cell);
-            return false;
-          });
-      }
-      LayerKernel touch{ this };
+      CoverKernel cover{ &tree, &added, &covered };
+      executor.For(0, static_cast<std::int64_t>(added.size()), 256, cover);
+      LayerKernel touch{ this, &covered, &directions };
       executor.For(0, leaves, 1024, touch);
       if (executor.ShouldAbort())
       {
@@ -1180,90 +1184,49 @@ private:
         }
       }
     }
-    this->CoveredCells = LatticeBitset<Dim>();
     return Status::Ok();
   }
 
-  /// Calls visit(point) for the lattice points of the box [lower, upper) until it returns true;
-  /// returns whether it did.
-  template <class Visitor>
-  static bool ForEachLatticePoint(
-    const LatticeIndex<Dim>& lower, const LatticeIndex<Dim>& upper, Visitor&& visit)
+  /// Marks the lattice cells of the leaves added last as covered.
+  struct CoverKernel
   {
-    for (int axis = 0; axis < Dim; ++axis)
+    using Scratch = NoScratch;
+    const Spacetree<Dim>* Tree;
+    const std::vector<std::int64_t>* Leaves;
+    LatticeBitset<Dim>* Covered;
+    void operator()(NoScratch&, std::int64_t begin, std::int64_t end) const
     {
-      if (upper[axis] <= lower[axis])
+      for (std::int64_t i = begin; i < end; ++i)
       {
-        return false;
-      }
-    }
-    LatticeIndex<Dim> point = lower;
-    for (;;)
-    {
-      if (visit(point))
-      {
-        return true;
-      }
-      int axis = 0;
-      for (; axis < Dim; ++axis)
-      {
-        if (++point[axis] < upper[axis])
+        const std::int64_t leaf = (*this->Leaves)[i];
+        const LatticeIndex<Dim>& anchor = this->Tree->LeafAnchors[leaf];
+        const LatticeIndex<Dim> size = this->Tree->GetCellSize(this->Tree->LeafLevels[leaf]);
+        LatticeIndex<Dim> upper;
+        for (int axis = 0; axis < Dim; ++axis)
         {
-          break;
+          upper[axis] = anchor[axis] + size[axis];
         }
-        point[axis] = lower[axis];
-      }
-      if (axis == Dim)
-      {
-        return false;
+        ForEachLatticePoint<Dim>(
+          anchor, upper, [&](const LatticeIndex<Dim>& cell) { this->Covered->Set(cell); });
       }
     }
-  }
+  };
 
-  /// Whether a background leaf touches (shares at least a point with) a covered lattice cell.
-  bool TouchesCoveredCells(std::int64_t leaf) const
-  {
-    const Spacetree<Dim>& tree = *this->Tree;
-    const LatticeIndex<Dim> anchor = tree.LeafAnchors[leaf];
-    const LatticeIndex<Dim> size = tree.GetCellSize(tree.LeafLevels[leaf]);
-    // The cells around the leaf: for each axis and side, the slab of cells just outside it.
-    for (int axis = 0; axis < Dim; ++axis)
-    {
-      for (int side = 0; side < 2; ++side)
-      {
-        LatticeIndex<Dim> lower, upper;
-        for (int other = 0; other < Dim; ++other)
-        {
-          lower[other] = std::max<std::int64_t>(anchor[other] - 1, 0);
-          upper[other] =
-            std::min<std::int64_t>(anchor[other] + size[other] + 1, this->LatticeDimensions[other]);
-        }
-        lower[axis] = side == 0 ? anchor[axis] - 1 : anchor[axis] + size[axis];
-        upper[axis] = lower[axis] + 1;
-        if (lower[axis] < 0 || upper[axis] > this->LatticeDimensions[axis])
-        {
-          continue;
-        }
-        if (ForEachLatticePoint(lower, upper,
-              [&](const LatticeIndex<Dim>& cell) { return this->CoveredCells.Test(cell); }))
-        {
-          return true;
-        }
-      }
-    }
-    return false;
-  }
-
+  /// Marks (2) the background leaves not selected yet that share a point with a covered cell.
   struct LayerKernel
   {
     using Scratch = NoScratch;
     SpacetreeTessellator* Self;
+    const LatticeBitset<Dim>* Covered;
+    const std::vector<LatticeIndex<Dim>>* Directions;
     void operator()(NoScratch&, std::int64_t begin, std::int64_t end) const
     {
+      const Spacetree<Dim>& tree = *this->Self->Tree;
       for (std::int64_t leaf = begin; leaf < end; ++leaf)
       {
-        if (this->Self->Tree->LeafMaterials[leaf] == BackgroundMaterial &&
-          this->Self->LayerLeaves[leaf] == 0 && this->Self->TouchesCoveredCells(leaf))
+        if (tree.LeafMaterials[leaf] == BackgroundMaterial && this->Self->LayerLeaves[leaf] == 0 &&
+          !ForEachAdjacentCell<Dim>(tree, leaf, *this->Directions,
+            [&](const LatticeIndex<Dim>& cell) { return !this->Covered->Test(cell); }))
         {
           this->Self->LayerLeaves[leaf] = 2; // added by this layer
         }
@@ -1514,9 +1477,8 @@ private:
   LatticeBitset<Dim> PointSet;
   /// Leaves output: the output points that hang on an output leaf (vertex lattice).
   mutable LatticeBitset<Dim> HangingSet;
-  /// Boundary layers: background leaves selected (1), and the cells covered while selecting.
+  /// Boundary layers: the background leaves selected (1).
   std::vector<std::uint8_t> LayerLeaves;
-  LatticeBitset<Dim> CoveredCells;
   std::vector<std::int64_t> CellOffsets;
   std::vector<std::int64_t> ConnectivityOffsets;
   std::int64_t NumberOfPoints = 0;

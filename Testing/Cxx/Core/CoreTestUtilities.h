@@ -81,31 +81,8 @@ template <int D, class Visitor>
 void ForEachIndexInBox(
   const stm::LatticeIndex<D>& lower, const stm::LatticeIndex<D>& upper, Visitor&& visit)
 {
-  for (int axis = 0; axis < D; ++axis)
-  {
-    if (upper[axis] <= lower[axis])
-    {
-      return;
-    }
-  }
-  stm::LatticeIndex<D> index = lower;
-  for (;;)
-  {
-    visit(static_cast<const stm::LatticeIndex<D>&>(index));
-    int axis = 0;
-    for (; axis < D; ++axis)
-    {
-      if (++index[axis] < upper[axis])
-      {
-        break;
-      }
-      index[axis] = lower[axis];
-    }
-    if (axis == D)
-    {
-      return;
-    }
-  }
+  stm::ForEachLatticePoint<D>(
+    lower, upper, [&](const stm::LatticeIndex<D>& index) { visit(index); });
 }
 
 template <int D, class Visitor>

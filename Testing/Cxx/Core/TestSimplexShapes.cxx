@@ -3,6 +3,7 @@
 // a small, fixed set of simplices, whatever the image. The set must not grow with the image.
 
 #include "CoreTestUtilities.h"
+#include "Tessellate/ElementShapeEnumeration.h"
 
 #include <functional>
 #include <set>
@@ -18,36 +19,13 @@ class SimplexShapesTest : public ::testing::Test
 using ShapeDimensions = ::testing::Types<Dim<2>, Dim<3>>;
 TYPED_TEST_SUITE(SimplexShapesTest, ShapeDimensions);
 
-/// A similarity invariant of a simplex: its squared edge lengths, sorted, divided by their
-/// greatest common divisor. Exact in integers, independent of vertex order, translation, the
-/// symmetries of the lattice and scaling.
+/// A similarity invariant of a simplex (stm::SimilarityKey of its vertices).
 using ShapeKey = std::vector<std::int64_t>;
 
 template <int D>
 ShapeKey ShapeOf(const std::array<stm::LatticeIndex<D>, D + 1>& vertices)
 {
-  ShapeKey key;
-  std::int64_t divisor = 0;
-  for (int a = 0; a <= D; ++a)
-  {
-    for (int b = a + 1; b <= D; ++b)
-    {
-      std::int64_t squared = 0;
-      for (int axis = 0; axis < D; ++axis)
-      {
-        const std::int64_t delta = vertices[b][axis] - vertices[a][axis];
-        squared += delta * delta;
-      }
-      key.push_back(squared);
-      divisor = std::gcd(divisor, squared);
-    }
-  }
-  for (auto& squared : key)
-  {
-    squared /= divisor;
-  }
-  std::sort(key.begin(), key.end());
-  return key;
+  return stm::SimilarityKey<D>(vertices.data(), D + 1);
 }
 
 template <int D>

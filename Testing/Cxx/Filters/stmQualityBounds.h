@@ -345,27 +345,7 @@ std::size_t CountShapes(const stm::TessellationCells<Dim>& cells)
   for (std::uint8_t shape : cells.Shapes)
   {
     const int count = stm::CellPointCount(Dim, shape);
-    std::vector<std::int64_t> key;
-    std::int64_t divisor = 0;
-    for (int a = 0; a < count; ++a)
-    {
-      for (int b = a + 1; b < count; ++b)
-      {
-        std::int64_t squared = 0;
-        for (int axis = 0; axis < Dim; ++axis)
-        {
-          const std::int64_t delta = cells.Points[first + b][axis] - cells.Points[first + a][axis];
-          squared += delta * delta;
-        }
-        key.push_back(squared);
-        divisor = std::gcd(divisor, squared);
-      }
-    }
-    for (auto& squared : key)
-    {
-      squared /= divisor;
-    }
-    std::sort(key.begin(), key.end());
+    std::vector<std::int64_t> key = stm::SimilarityKey<Dim>(&cells.Points[first], count);
     key.push_back(shape);
     shapes.insert(key);
     first += count;
