@@ -7,6 +7,7 @@
 //   stmElementQuality [--input aal.nii.gz] [--output docs/quality.md]
 
 #include "stmImageToSpacetree.h"
+#include "stmReportTool.h"
 #include "stmSpacetreeBalance.h"
 #include "stmSpacetreeTessellate.h"
 #include "stmVerdictQuality.h"
@@ -176,16 +177,10 @@ int main(int argc, char* argv[])
 {
   std::string input = "/usr/share/mricron/templates/aal.nii.gz";
   std::string output;
-  for (int i = 1; i + 1 < argc; i += 2)
+  if (!stmReport::ParseArguments(argc, argv,
+        "stmElementQuality [--input aal.nii.gz] [--output docs/quality.md]", input, output))
   {
-    if (std::strcmp(argv[i], "--input") == 0)
-    {
-      input = argv[i + 1];
-    }
-    else if (std::strcmp(argv[i], "--output") == 0)
-    {
-      output = argv[i + 1];
-    }
+    return 2;
   }
   vtkSMPTools::SetBackend("STDThread");
   vtkNew<vtkNIFTIImageReader> reader;
@@ -241,12 +236,5 @@ int main(int argc, char* argv[])
     }
   }
   std::cerr << "\n";
-  if (output.empty())
-  {
-    std::cout << report.str();
-    return 0;
-  }
-  std::ofstream file(output);
-  file << report.str();
-  return file.good() ? 0 : 1;
+  return stmReport::WriteReport(report.str(), output) ? 0 : 1;
 }

@@ -9,6 +9,7 @@
 //   stmPatternComparison [--input aal.nii.gz] [--output docs/refinement-patterns.md]
 
 #include "stmImageToSpacetree.h"
+#include "stmReportTool.h"
 #include "stmSpacetreeBalance.h"
 #include "stmSpacetreeTessellate.h"
 #include "stmVerdictQuality.h"
@@ -43,6 +44,9 @@
 
 namespace
 {
+using stmReport::Count;
+using stmReport::Fixed;
+
 const char* const TemplateNames[2] = { "Checkerboard", "Kuhn" };
 
 /// Per level of the spacetree (0 = root): body leaves, how many of them took their template
@@ -248,24 +252,6 @@ std::string Split(const LevelTable& table, std::size_t level)
   return text.str();
 }
 
-/// Thousands separated by commas, as in the prose.
-std::string Count(long long value)
-{
-  std::string digits = std::to_string(value);
-  for (int i = static_cast<int>(digits.size()) - 3; i > 0; i -= 3)
-  {
-    digits.insert(static_cast<std::size_t>(i), ",");
-  }
-  return digits;
-}
-
-std::string Fixed(double value, int precision)
-{
-  std::ostringstream text;
-  text << std::fixed << std::setprecision(precision) << value;
-  return text.str();
-}
-
 std::string Percent(double value)
 {
   std::ostringstream text;
@@ -279,16 +265,11 @@ int main(int argc, char* argv[])
 {
   std::string input = "/usr/share/mricron/templates/aal.nii.gz";
   std::string output;
-  for (int i = 1; i + 1 < argc; i += 2)
+  if (!stmReport::ParseArguments(argc, argv,
+        "stmPatternComparison [--input aal.nii.gz] [--output docs/refinement-patterns.md]", input,
+        output))
   {
-    if (std::strcmp(argv[i], "--input") == 0)
-    {
-      input = argv[i + 1];
-    }
-    else if (std::strcmp(argv[i], "--output") == 0)
-    {
-      output = argv[i + 1];
-    }
+    return 2;
   }
   vtkSMPTools::SetBackend("STDThread");
   vtkNew<vtkNIFTIImageReader> reader;
@@ -688,12 +669,5 @@ int main(int argc, char* argv[])
               "elongated.\n";
   }
 
-  if (output.empty())
-  {
-    std::cout << report.str();
-    return 0;
-  }
-  std::ofstream file(output);
-  file << report.str();
-  return file.good() ? 0 : 1;
+  return stmReport::WriteReport(report.str(), output) ? 0 : 1;
 }

@@ -7,6 +7,7 @@
 //   stmQualityBounds [--output docs/quality-bounds.md | --check docs/quality-bounds.md]
 
 #include "stmQualityBounds.h"
+#include "stmReportTool.h"
 
 #include <cstring>
 #include <fstream>
@@ -55,12 +56,5 @@ int main(int argc, char* argv[])
     }
     return 0;
   }
-  if (output.empty())
-  {
-    std::cout << report;
-    return 0;
-  }
-  std::ofstream file(output);
-  file << report;
-  return file.good() ? 0 : 1;
+  return stmReport::WriteReport(report, output) ? 0 : 1;
 }

@@ -9,6 +9,7 @@
 
 #include "stmImageToSpacetree.h"
 #include "stmQualityBounds.h"
+#include "stmReportTool.h"
 #include "stmSpacetreeBalance.h"
 #include "stmSpacetreeTessellate.h"
 
@@ -38,6 +39,9 @@
 
 namespace
 {
+using stmReport::Count;
+using stmReport::Fixed;
+
 /// One configuration of stmSpacetreeTessellate.
 struct Variant
 {
@@ -191,24 +195,6 @@ Result Tessellate(vtkAlgorithmOutput* tree, const Variant& variant)
   return result;
 }
 
-/// Thousands separated by commas, as in the prose.
-std::string Count(long long value)
-{
-  std::string digits = std::to_string(value < 0 ? -value : value);
-  for (int i = static_cast<int>(digits.size()) - 3; i > 0; i -= 3)
-  {
-    digits.insert(static_cast<std::size_t>(i), ",");
-  }
-  return (value < 0 ? "-" : "") + digits;
-}
-
-std::string Fixed(double value, int precision)
-{
-  std::ostringstream text;
-  text << std::fixed << std::setprecision(precision) << value;
-  return text.str();
-}
-
 std::string Scientific(double value)
 {
   std::ostringstream text;
@@ -245,21 +231,10 @@ int main(int argc, char* argv[])
   const std::string defaultInput = "/usr/share/mricron/templates/aal.nii.gz";
   std::string input = defaultInput;
   std::string output;
-  for (int i = 1; i < argc; i += 2)
+  if (!stmReport::ParseArguments(
+        argc, argv, "stmTessellationReport [--input aal.nii.gz] [--output FILE]", input, output))
   {
-    if (i + 1 < argc && std::strcmp(argv[i], "--input") == 0)
-    {
-      input = argv[i + 1];
-    }
-    else if (i + 1 < argc && std::strcmp(argv[i], "--output") == 0)
-    {
-      output = argv[i + 1];
-    }
-    else
-    {
-      std::cerr << "usage: stmTessellationReport [--input aal.nii.gz] [--output FILE]\n";
-      return 2;
-    }
+    return 2;
   }
   vtkNew<vtkNIFTIImageReader> reader;
   reader->SetFileName(input.c_str());
@@ -427,12 +402,5 @@ int main(int argc, char* argv[])
          << " mm³). This cheap check catches missing or overlapping elements in bulk; "
             "conformity and orientation are tested in Testing/Cxx/Filters.\n";
 
-  if (output.empty())
-  {
-    std::cout << report.str();
-    return allValid ? 0 : 1;
-  }
-  std::ofstream file(output);
-  file << report.str();
-  return file.good() && allValid ? 0 : 1;
+  return stmReport::WriteReport(report.str(), output) && allValid ? 0 : 1;
 }
