@@ -509,8 +509,6 @@ public:
   /// Whether every cell is a simplex (Dim + 1 point ids each).
   bool IsSimplicial() const { return this->Options.Output == TessellationOutput::Simplices; }
 
-  std::int64_t GetNumberOfSimplices() const { return this->GetNumberOfCells(); }
-
   /// Writes the point ids of every cell (see CellPointCount for their order), positively
   /// oriented, its shape (may be null for simplicial output) and the material index of each
   /// cell. IdType is the integer type of the output connectivity.
@@ -622,19 +620,8 @@ public:
   /// RegularCellCodes(leaf) over its corners.
   bool IsRegularLeaf(std::int64_t leaf) const
   {
-    switch (this->Options.Output)
-    {
-      case TessellationOutput::Leaves:
-        return true;
-      case TessellationOutput::Hybrid:
-        return this->IsBoundaryRegular(this->LeafFace(leaf));
-      default:
-      {
-        const Face cell = this->LeafFace(leaf);
-        return this->Options.Templates != TemplateRule::MidpointEverywhere &&
-          this->Tables.TemplateAllowed[cell.Level] && this->IsBoundaryRegular(cell);
-      }
-    }
+    return this->Options.Output == TessellationOutput::Leaves ||
+      this->TakesTemplate(this->LeafFace(leaf));
   }
 
   /// Corner codes (bit i: far side along axis i) of the cells of a regular leaf, positively
@@ -642,10 +629,6 @@ public:
   const std::vector<std::uint8_t>& RegularCellCodes(std::int64_t leaf) const
   {
     return this->RegularCellTables[this->IsSimplicial() ? this->Parity(this->LeafFace(leaf)) : 0];
-  }
-  const std::vector<std::uint8_t>& RegularCellSimplices(std::int64_t leaf) const
-  {
-    return this->RegularCellCodes(leaf);
   }
   /// Shape of the cells of RegularCellCodes.
   int RegularCellShape() const { return this->IsSimplicial() ? 1 : Dim; }

@@ -366,9 +366,9 @@ TYPED_TEST(SpacetreeTessellationTest, AbortedExecutorStopsEveryStage)
   stm::SpacetreeTessellator<D> tessellator;
   ASSERT_TRUE(tessellator.Prepare(tree, options, executor).IsOk());
   std::vector<std::int64_t> connectivity(
-    static_cast<std::size_t>(tessellator.GetNumberOfSimplices() * (D + 1)));
+    static_cast<std::size_t>(tessellator.GetNumberOfCells() * (D + 1)));
   std::vector<stm::MaterialIndex> materials(
-    static_cast<std::size_t>(tessellator.GetNumberOfSimplices()));
+    static_cast<std::size_t>(tessellator.GetNumberOfCells()));
   executor.RequestAbort();
   EXPECT_EQ(tessellator.WriteSimplices(connectivity.data(), materials.data(), executor).GetCode(),
     stm::Status::Code::Aborted);
@@ -443,7 +443,7 @@ TYPED_TEST(SpacetreeTessellationTest, RegularLeafTablesAgreeWithTheGeneralConstr
         tessellator.TessellateLeaf(leaf, scratch);
         stm::SpacetreeTessellator<D>::Orient(scratch.LeafCells);
         std::vector<stm::LatticeIndex<D>> fromTable;
-        for (std::uint8_t code : tessellator.RegularCellSimplices(leaf))
+        for (std::uint8_t code : tessellator.RegularCellCodes(leaf))
         {
           stm::LatticeIndex<D> corner;
           for (int axis = 0; axis < D; ++axis)
