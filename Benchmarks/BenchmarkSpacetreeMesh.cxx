@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Timings of the three stages on the AAL atlas (181 x 217 x 181 voxels, 116 labels), each stage
-// alone on the output of the previous one, and all three together. Run with
+// Timings of the stages on the AAL atlas (181 x 217 x 181 voxels, 116 labels), each stage alone
+// on the output of the previous one, and the first three together. Run with
 //   BenchmarkSpacetreeMesh --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 // The SMP backend is STDThread; VTK_SMP_MAX_THREADS or --threads=N (first argument) limit it.
 
 #include "stmImageToSpacetree.h"
+#include "stmMarchingSimplices.h"
 #include "stmSpacetreeBalance.h"
 #include "stmSpacetreeTessellate.h"
 
@@ -94,6 +95,7 @@ void BM_SpacetreeTessellate(benchmark::State& state)
   for (auto _ : state)
   {
     vtkNew<stmSpacetreeTessellate> tessellate;
+    tessellate->SetSeparatingFunction(stmSpacetreeTessellate::NO_FUNCTION); // the staircase mesh
     tessellate->SetInputData(input);
     tessellate->Update();
     cells = tessellate->GetOutput()->GetNumberOfCells();
@@ -112,6 +114,7 @@ void BM_AllThreeStages(benchmark::State& state)
     vtkNew<stmImageToSpacetree> tree;
     vtkNew<stmSpacetreeBalance> balance;
     vtkNew<stmSpacetreeTessellate> tessellate;
+    tessellate->SetSeparatingFunction(stmSpacetreeTessellate::NO_FUNCTION); // the staircase mesh
     tree->SetInputData(image);
     balance->SetInputConnection(tree->GetOutputPort());
     tessellate->SetInputConnection(balance->GetOutputPort());
@@ -121,6 +124,29 @@ void BM_AllThreeStages(benchmark::State& state)
   state.counters["tetrahedra"] = static_cast<double>(cells);
   state.counters["tetrahedra/s"] =
     benchmark::Counter(static_cast<double>(cells), benchmark::Counter::kIsIterationInvariantRate);
+}
+
+/// Marching simplices on the default mesh of the atlas (balance 1, the labels function with its
+/// boundary layer): input tetrahedra per second, volume (0) or surface (1) output.
+void BM_MarchingSimplices(benchmark::State& state)
+{
+  vtkNew<stmSpacetreeTessellate> tessellate;
+  tessellate->SetInputData(Spacetree(1));
+  tessellate->Update();
+  vtkUnstructuredGrid* mesh = tessellate->GetOutput();
+  vtkIdType cells = 0;
+  for (auto _ : state)
+  {
+    vtkNew<stmMarchingSimplices> cut;
+    cut->SetOutputMode(static_cast<int>(state.range(0)));
+    cut->SetInputData(mesh);
+    cut->Update();
+    cells = vtkDataSet::SafeDownCast(cut->GetOutputDataObject(0))->GetNumberOfCells();
+  }
+  state.counters["input tetrahedra"] = static_cast<double>(mesh->GetNumberOfCells());
+  state.counters["output cells"] = static_cast<double>(cells);
+  state.counters["tetrahedra/s"] = benchmark::Counter(
+    static_cast<double>(mesh->GetNumberOfCells()), benchmark::Counter::kIsIterationInvariantRate);
 }
 
 BENCHMARK(BM_ImageToSpacetree)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -137,6 +163,7 @@ BENCHMARK(BM_SpacetreeTessellate)
   ->Unit(benchmark::kMillisecond)
   ->UseRealTime();
 BENCHMARK(BM_AllThreeStages)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MarchingSimplices)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 } // namespace
 
 int main(int argc, char** argv)

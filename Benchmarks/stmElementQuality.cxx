@@ -53,6 +53,7 @@ vtkSmartPointer<vtkUnstructuredGrid> Mesh(vtkImageData* image, int balanceLevel,
   vtkNew<stmImageToSpacetree> tree;
   vtkNew<stmSpacetreeBalance> balance;
   vtkNew<stmSpacetreeTessellate> tessellate;
+  tessellate->SetSeparatingFunction(stmSpacetreeTessellate::NO_FUNCTION); // the staircase mesh
   tree->SetInputData(image);
   balance->SetInputConnection(tree->GetOutputPort());
   balance->SetBalanceLevel(std::max(1, balanceLevel));

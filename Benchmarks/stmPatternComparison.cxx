@@ -211,6 +211,7 @@ struct Spacetree
   Result Tessellate(int cellTemplate, bool perLevel)
   {
     vtkNew<stmSpacetreeTessellate> tessellate;
+    tessellate->SetSeparatingFunction(stmSpacetreeTessellate::NO_FUNCTION); // the staircase mesh
     tessellate->SetInputConnection(this->Balance->GetOutputPort());
     tessellate->SetCellTemplate(cellTemplate);
     const auto start = std::chrono::steady_clock::now();

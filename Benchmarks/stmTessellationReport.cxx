@@ -163,6 +163,7 @@ void Measure(vtkUnstructuredGrid* mesh, Result& result)
 Result Tessellate(vtkAlgorithmOutput* tree, const Variant& variant)
 {
   vtkNew<stmSpacetreeTessellate> tessellate;
+  tessellate->SetSeparatingFunction(stmSpacetreeTessellate::NO_FUNCTION); // the staircase mesh
   tessellate->SetInputConnection(tree);
   tessellate->SetOutputType(variant.OutputType);
   tessellate->SetTemplateRule(variant.TemplateRule);

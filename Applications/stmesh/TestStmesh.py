@@ -9,7 +9,8 @@ written; meshes are read back with stmeshTestHelper (VTK readers), which also wr
 label images used for the format and error cases. The cases of --elements, --templates,
 --cell-template and --boundary-layer write their own label images and read the meshes back with
 the VTK Python modules (Debian's python3 sees them; CMake runs this script with it). Exits 0 when
-the case passes.
+the case passes. The cut cases (--separating, --output-mode, --keep, --iso) do the same and
+also read surfaces back; the cases that check the staircase tessellation pass --separating none.
 """
 
 import argparse
@@ -26,6 +27,10 @@ TRIANGLE, QUAD, TETRA, HEXAHEDRON, PYRAMID = 5, 9, 10, 12, 14
 CELL_TYPE_NAMES = {TRIANGLE: "triangle", QUAD: "quad", TETRA: "tetra", HEXAHEDRON: "hexahedron",
                    PYRAMID: "pyramid"}
 STAGES_TESSELLATE = ["read", "spacetree", "balance", "tessellate", "write"]
+STAGES_CUT = ["read", "spacetree", "balance", "tessellate", "cut", "write"]
+# The staircase mesh of the voxels, as before the cut stage existed: the cases that check exact
+# tessellation counts, stages or volumes per label give this.
+STAIRCASE = ["--separating", "none"]
 # The spacetree parameters of the summary when none of their options is given.
 DEFAULT_SPACETREE_PARAMETERS = {
     "pattern": "auto", "root_cell_size": None, "max_cell_size_labels": {},
@@ -35,6 +40,10 @@ DEFAULT_SPACETREE_PARAMETERS = {
 DEFAULT_TESSELLATE_PARAMETERS = {
     "elements": "simplicial", "templates": "regular", "cell_template": "checkerboard",
     "boundary_layers": 0}
+# The cut parameters of the summary when none of their options is given, and with STAIRCASE.
+DEFAULT_CUT_PARAMETERS = {"separating": "labels", "output_mode": "volume", "keep": "both",
+                          "iso": 0}
+STAIRCASE_CUT_PARAMETERS = dict(DEFAULT_CUT_PARAMETERS, separating="none")
 
 
 class CaseFailed(Exception):
@@ -185,7 +194,10 @@ def case_help_and_version(c):
                    "slab:PX,PY,PZ,NX,NY,NZ,W", "--grading G", "--sizing-array NAME",
                    "--balance-label L:LEVEL", "--balance-region REGION:LEVEL",
                    "--elements simplicial|hybrid|leaves", "--templates midpoint|regular|extended",
-                   "--cell-template checkerboard|kuhn", "--boundary-layer N"]:
+                   "--cell-template checkerboard|kuhn", "--boundary-layer N",
+                   "--separating labels|smooth:SIGMA|gray:FILE:ISO|sphere:CX,CY,CZ,R|none",
+                   "--output-mode volume|surface", "--keep both|inside|outside", "--iso V",
+                   "--stop-after spacetree|balance|tessellate|cut"]:
         check(option in out, "help does not mention %s" % option)
     out, _ = c.run_ok(["-h"])
     check(out.startswith("Usage: stmesh"), "-h does not print the usage")
@@ -195,7 +207,7 @@ def case_help_and_version(c):
 
 def case_default_input_vtu(c):
     output, summary_path = c.path("aal.vtu"), c.path("aal.json")
-    out, _ = c.run_ok(["-o", output, "--summary", summary_path])
+    out, _ = c.run_ok(["-o", output, "--summary", summary_path] + STAIRCASE)
     check("no INPUT given; meshing the default image " + c.aal in out,
           "no line saying the default image is meshed")
     check_table(out, STAGES_TESSELLATE)
@@ -205,7 +217,7 @@ def case_default_input_vtu(c):
     check(summary["parameters"] == dict(
         {"labels": [], "all_labels": True, "max_cell_size": 16, "balance": 1,
          "stop_after": "tessellate", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS,
-        **DEFAULT_TESSELLATE_PARAMETERS),
+        **DEFAULT_TESSELLATE_PARAMETERS, **STAIRCASE_CUT_PARAMETERS),
         "bad parameters %s" % summary["parameters"])
     # 1 mm voxels, MaxCellSize 16: cubes of 16 down to 1 voxel.
     check(summary["voxel_subdivision"] == [1, 1, 1], "bad voxel subdivision")
@@ -235,7 +247,7 @@ def case_default_input_vtu(c):
 def case_legacy_vtk(c):
     output, summary_path = c.path("aal_1_2.vtk"), c.path("aal_1_2.json")
     out, _ = c.run_ok([c.aal, "-o", output, "--labels", "1,2", "--threads", "2",
-                       "--summary", summary_path])
+                       "--summary", summary_path] + STAIRCASE)
     check_table(out, STAGES_TESSELLATE)
     summary = load_summary(summary_path)
     check(summary["threads"] == 2, "--threads 2 gave %s threads" % summary["threads"])
@@ -295,7 +307,7 @@ def case_input_formats(c):
         image = c.make_image(name, scalar_type)
         output = c.path(name.replace(".", "_") + ".vtu")
         summary_path = output + ".json"
-        c.run_ok([image, "-o", output, "--summary", summary_path])
+        c.run_ok([image, "-o", output, "--summary", summary_path] + STAIRCASE)
         summary = load_summary(summary_path)
         mesh = c.read_back(output)
         check_mesh_against_summary(mesh, summary, TETRA, "tetrahedra_per_material")
@@ -311,7 +323,7 @@ def case_input_formats(c):
                                ("zlib", b'compressor="vtkZLibDataCompressor"'),
                                ("none", None)]:
         output = c.path("compressor_%s.vtu" % compressor)
-        c.run_ok([image, "-o", output, "--compressor", compressor])
+        c.run_ok([image, "-o", output, "--compressor", compressor] + STAIRCASE)
         with open(output, "rb") as mesh_file:
             head = mesh_file.read(4096)
         if marker:
@@ -364,7 +376,7 @@ def case_summary_json(c):
     image = c.make_image("labels.mha", "int16")
     output, summary_path = c.path("mesh.vtu"), c.path("summary.json")
     c.run_ok([image, "-o", output, "--labels", "2,7", "--max-cell-size", "4", "--balance", "2",
-              "--summary", summary_path])
+              "--summary", summary_path] + STAIRCASE)
     summary = load_summary(summary_path)
     for key in ["input", "output", "parameters", "threads", "stages", "total_seconds",
                 "tetrahedra_per_material"]:
@@ -372,7 +384,7 @@ def case_summary_json(c):
     check(summary["parameters"] == dict(
         {"labels": [2, 7], "all_labels": False, "max_cell_size": 4, "balance": 2,
          "stop_after": "tessellate", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS,
-        **DEFAULT_TESSELLATE_PARAMETERS),
+        **DEFAULT_TESSELLATE_PARAMETERS, **STAIRCASE_CUT_PARAMETERS),
         "bad parameters %s" % summary["parameters"])
     check(summary["spacetree_axes"] == [0, 1, 2], "bad spacetree axes")
     check(summary["voxel_subdivision"] == [1, 1, 1], "bad voxel subdivision")
@@ -396,10 +408,13 @@ def case_summary_json(c):
           "bad inserted_points %s" % tessellate["inserted_points"])
     check("hexahedron_volume_fraction" not in tessellate,
           "hexahedron_volume_fraction in a simplicial run")
+    check(tessellate["boundary_layers"] == 0,
+          "boundary_layers %s without a separating function" % tessellate["boundary_layers"])
     for entry in summary["stages"]:
         if entry["name"] != "tessellate":
             check("inserted_points" not in entry and "cells_by_type" not in entry,
                   "stage %s has tessellation figures" % entry["name"])
+        check("split_cells" not in entry, "stage %s has cut figures" % entry["name"])
     c.run_failing([image, "-o", c.path("same.vtu"), "--summary", c.path("same.vtu")], 1,
                   "same file", output=c.path("same.vtu"))
     # An unwritable summary fails before any meshing.
@@ -595,10 +610,10 @@ def check_volumes(mesh, flat=False):
 
 
 def mesh_run(c, image, name, arguments, stop_after=None):
-    """stmesh IMAGE -o NAME.vtu --summary NAME.json ARGUMENTS: the summary and the read-back,
-    after checking that they agree."""
+    """stmesh IMAGE -o NAME.vtu --summary NAME.json ARGUMENTS --separating none: the summary and
+    the read-back of the staircase mesh, after checking that they agree."""
     output, summary_path = c.path(name + ".vtu"), c.path(name + ".json")
-    extra = ["--stop-after", stop_after] if stop_after else []
+    extra = (["--stop-after", stop_after] if stop_after else []) + STAIRCASE
     out, err = c.run_ok([image, "-o", output, "--summary", summary_path] + extra + arguments)
     summary, mesh = load_summary(summary_path), c.read_back(output, geometry=True)
     if stop_after in (None, "tessellate"):
@@ -1021,17 +1036,15 @@ def ball(i, j, k):
     return 1 if (i - 7) ** 2 + (j - 7) ** 2 + (k - 6) ** 2 <= 25 else 0
 
 
-def read_mesh(path):
-    """The mesh of a .vtu (XML, inline binary) or legacy .vtk file, read by VTK's readers, as a
-    dict: cells, points, cell types (VTK numbers) per cell, Material per cell, the volume (area
-    of a 2D mesh) of every cell by vtkCellSizeFilter, the point array HangingNode (None
-    without it) and the points in quarter millimetres (exact for the 1 mm voxels used here)."""
+def read_grid(path):
+    """The unstructured grid of a .vtu (checked to be inline binary XML: Debian's expat cannot
+    read appended data) or legacy .vtk file: (VTK modules, grid, the error list of readers)."""
     vtk = vtk_modules()
     errors = []
     if path.endswith(".vtu"):
         with open(path, "rb") as mesh_file:
-            head = mesh_file.read(4096)
-        check(b'format="binary"' in head and b"<AppendedData" not in head,
+            content = mesh_file.read()
+        check(b'format="binary"' in content[:4096] and b"<AppendedData" not in content,
               "%s is not inline binary XML" % path)
         reader = watched(vtk["vtkXMLUnstructuredGridReader"](), errors)
     else:
@@ -1039,8 +1052,17 @@ def read_mesh(path):
     reader.SetFileName(path)
     reader.Update()
     grid = reader.GetOutput()
-    check(not errors and grid is not None and grid.GetNumberOfCells() > 0,
-          "cannot read back %s: %s" % (path, errors))
+    check(not errors and grid is not None, "cannot read back %s: %s" % (path, errors))
+    return vtk, grid, errors
+
+
+def read_mesh(path):
+    """The mesh of a .vtu (XML, inline binary) or legacy .vtk file, read by VTK's readers, as a
+    dict: cells, points, cell types (VTK numbers) per cell, Material per cell, the volume (area
+    of a 2D mesh) of every cell by vtkCellSizeFilter, the point array HangingNode (None
+    without it) and the points in quarter millimetres (exact for the 1 mm voxels used here)."""
+    vtk, grid, errors = read_grid(path)
+    check(grid.GetNumberOfCells() > 0, "%s has no cells" % path)
     sizes = watched(vtk["vtkCellSizeFilter"](), errors)
     sizes.SetInputData(grid)
     sizes.Update()
@@ -1117,11 +1139,12 @@ def check_inserted_points(tessellate, mesh, corners, what):
 
 
 def tessellate_run(c, image, name, arguments, extension=".vtu"):
-    """stmesh IMAGE -o NAME.vtu --summary NAME.json ARGUMENTS: the summary, the tessellate
-    stage, the read-back mesh and stderr, after checking that the summary agrees with the file:
-    cells, points, cells per type and per material, and the hexahedron volume share."""
+    """stmesh IMAGE -o NAME.vtu --summary NAME.json ARGUMENTS --separating none: the summary,
+    the tessellate stage, the read-back staircase mesh and stderr, after checking that the
+    summary agrees with the file: cells, points, cells per type and per material, and the
+    hexahedron volume share."""
     output, summary_path = c.path(name + extension), c.path(name + ".json")
-    out, err = c.run_ok([image, "-o", output, "--summary", summary_path] + arguments)
+    out, err = c.run_ok([image, "-o", output, "--summary", summary_path] + arguments + STAIRCASE)
     summary, mesh = load_summary(summary_path), read_mesh(output)
     tessellate = stage(summary, "tessellate")
     check(tessellate["cells"] == mesh["cells"] and tessellate["points"] == mesh["points"],
@@ -1167,7 +1190,8 @@ def case_option_elements_hybrid_uniform(c):
         check(summary["parameters"] == dict(
             {"labels": [], "all_labels": True, "max_cell_size": 1, "balance": 1,
              "stop_after": "tessellate", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS,
-            **dict(DEFAULT_TESSELLATE_PARAMETERS, elements="hybrid")),
+            **dict(DEFAULT_TESSELLATE_PARAMETERS, elements="hybrid"),
+            **STAIRCASE_CUT_PARAMETERS),
             "bad parameters %s" % summary["parameters"])
         check(tessellate["cells_by_type"] == {"hexahedron": 252},
               "%s: cells %s, expected 252 hexahedra" % (name, tessellate["cells_by_type"]))
@@ -1358,6 +1382,616 @@ def case_error_tessellate_option_values(c):
         check(len(error_lines) == 1 and error_lines[0].startswith(ERROR_PREFIX + " " + text),
               "expected one error line starting with %r, got %s" % (text, error_lines))
         check("--help" in err, "usage errors should point to --help")
+
+
+# ------------------------------------------------------------------------------------------------
+# The cut stage (--separating, --output-mode, --keep, --iso): stmMarchingSimplices on the
+# tetrahedra, at the labels' function or one of stmSeparatingFunction.
+
+def cut_vtk_modules():
+    """The VTK classes of the cut cases, besides vtk_modules()."""
+    try:
+        from vtkmodules.vtkIOImage import vtkMetaImageWriter
+        from vtkmodules.vtkIOLegacy import vtkPolyDataReader
+        from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
+    except ImportError as error:
+        raise CaseFailed("%s cannot import the VTK Python modules (%s); run this script with "
+                         "Debian's /usr/bin/python3" % (sys.executable, error))
+    return dict(vtk_modules(), vtkMetaImageWriter=vtkMetaImageWriter,
+                vtkPolyDataReader=vtkPolyDataReader, vtkXMLPolyDataReader=vtkXMLPolyDataReader)
+
+
+def big_ball(i, j, k):
+    """Label 1: a ball of radius 8 voxels around (12, 12, 12) in 25 x 25 x 25."""
+    return 1 if (i - 12) ** 2 + (j - 12) ** 2 + (k - 12) ** 2 <= 64 else 0
+
+
+def ball_volume(radius):
+    return 4.0 / 3.0 * 3.141592653589793 * radius ** 3
+
+
+def write_gray_image(c, name, dimensions, gray):
+    """A float gray image of 1 mm voxels with gray(i, j, k) at each voxel, as .mha or .vti."""
+    vtk = cut_vtk_modules()
+    image = vtk["vtkImageData"]()
+    image.SetDimensions(*dimensions)
+    image.AllocateScalars(10, 1)  # VTK_FLOAT
+    scalars = image.GetPointData().GetScalars()
+    scalars.SetName("gray")
+    index = 0
+    for k in range(dimensions[2]):
+        for j in range(dimensions[1]):
+            for i in range(dimensions[0]):
+                scalars.SetValue(index, gray(i, j, k))
+                index += 1
+    path = c.path(name)
+    errors = []
+    if name.endswith(".vti"):
+        writer = watched(vtk["vtkXMLImageDataWriter"](), errors)
+        writer.SetDataModeToBinary()
+    else:
+        writer = watched(vtk["vtkMetaImageWriter"](), errors)
+        writer.SetCompression(False)
+    writer.SetInputData(image)
+    writer.SetFileName(path)
+    writer.Write()
+    check(not errors and os.path.getsize(path) > 0, "cannot write %s: %s" % (name, errors))
+    return path
+
+
+def read_cut(path):
+    """The volume mesh of a cut run (.vtu or .vtk) as a dict: cells, points, the set of cell
+    types, Material and OriginalMaterial per cell (None without them), the measure (volume, or
+    area in 2D) of every cell and the names of the point and cell arrays."""
+    vtk, grid, errors = read_grid(path)
+    cells = grid.GetNumberOfCells()
+    types = set(grid.GetCellType(cell) for cell in range(cells))
+    measures = []
+    if cells:
+        sizes = watched(vtk["vtkCellSizeFilter"](), errors)
+        sizes.SetInputData(grid)
+        sizes.Update()
+        check(not errors, "vtkCellSizeFilter failed on %s" % path)
+        array = sizes.GetOutput().GetCellData().GetArray("Area" if TRIANGLE in types else "Volume")
+        measures = [array.GetValue(cell) for cell in range(cells)]
+    cell_data, point_data = grid.GetCellData(), grid.GetPointData()
+
+    def values(name):
+        array = cell_data.GetArray(name)
+        return None if array is None else [int(array.GetTuple1(cell)) for cell in range(cells)]
+
+    return {"cells": cells, "points": grid.GetNumberOfPoints(), "types": types,
+            "materials": values("Material"), "original": values("OriginalMaterial"),
+            "measures": measures,
+            "point_arrays": sorted(point_data.GetArrayName(i)
+                                   for i in range(point_data.GetNumberOfArrays())),
+            "cell_arrays": sorted(cell_data.GetArrayName(i)
+                                  for i in range(cell_data.GetNumberOfArrays()))}
+
+
+def material_volumes(mesh):
+    volumes = {}
+    for material, measure in zip(mesh["materials"], mesh["measures"]):
+        volumes[material] = volumes.get(material, 0.0) + measure
+    return volumes
+
+
+def close(value, reference, relative=1e-9):
+    return abs(value - reference) <= relative * abs(reference)
+
+
+def read_surface(path):
+    """The surface of a cut run (.vtp or .vtk): points, cells (point id lists), cell types,
+    OriginalMaterial per cell and the cell array names."""
+    vtk = cut_vtk_modules()
+    errors = []
+    if path.endswith(".vtp"):
+        with open(path, "rb") as surface_file:
+            content = surface_file.read()
+        check(b'type="PolyData"' in content[:4096] and b'format="binary"' in content[:4096] and
+              b"<AppendedData" not in content, "%s is not inline binary XML polydata" % path)
+        reader = watched(vtk["vtkXMLPolyDataReader"](), errors)
+    else:
+        with open(path, "rb") as surface_file:
+            head = surface_file.read(256)
+        check(b"\nBINARY\n" in head and b"POLYDATA" in head,
+              "%s is not binary legacy VTK polydata" % path)
+        reader = watched(vtk["vtkPolyDataReader"](), errors)
+    reader.SetFileName(path)
+    reader.Update()
+    surface = reader.GetOutput()
+    check(not errors and surface is not None, "cannot read back %s: %s" % (path, errors))
+    cells = []
+    for cell in range(surface.GetNumberOfCells()):
+        ids = surface.GetCell(cell).GetPointIds()
+        cells.append([ids.GetId(i) for i in range(ids.GetNumberOfIds())])
+    cell_data = surface.GetCellData()
+    original = cell_data.GetArray("OriginalMaterial")
+    return {"points": [surface.GetPoint(point) for point in range(surface.GetNumberOfPoints())],
+            "cells": cells,
+            "types": set(surface.GetCellType(cell) for cell in range(surface.GetNumberOfCells())),
+            "original": None if original is None else
+            [int(original.GetTuple1(cell)) for cell in range(surface.GetNumberOfCells())],
+            "cell_arrays": sorted(cell_data.GetArrayName(i)
+                                  for i in range(cell_data.GetNumberOfArrays()))}
+
+
+def check_closed_and_oriented(surface, what):
+    """Every edge of the surface (triangles, or the points of 2D lines) is shared by exactly two
+    of its cells, in opposite directions: a closed, consistently oriented surface."""
+    check(surface["cells"], "%s: the surface is empty" % what)
+    directed = {}
+    for ids in surface["cells"]:
+        for a, b in zip(ids, ids[1:] + ids[:1]) if len(ids) == 3 else [tuple(ids)]:
+            directed[(a, b)] = directed.get((a, b), 0) + 1
+    check(max(directed.values()) == 1, "%s: a directed edge occurs twice" % what)
+    if all(len(ids) == 3 for ids in surface["cells"]):
+        unmatched = [edge for edge in directed if (edge[1], edge[0]) not in directed]
+        check(not unmatched, "%s: %d edges have only one triangle (or two of the same "
+              "orientation), e.g. %s" % (what, len(unmatched), unmatched[:3]))
+    else:
+        starts = sorted(a for a, _ in directed)
+        ends = sorted(b for _, b in directed)
+        check(starts == ends and len(set(starts)) == len(starts),
+              "%s: the lines do not form closed curves" % what)
+
+
+def enclosed_volume(surface):
+    """The volume a closed triangle surface encloses, positive for outward normals."""
+    points = surface["points"]
+    total = 0.0
+    for a, b, c in surface["cells"]:
+        p, q, r = points[a], points[b], points[c]
+        total += (p[0] * (q[1] * r[2] - q[2] * r[1]) - p[1] * (q[0] * r[2] - q[2] * r[0]) +
+                  p[2] * (q[0] * r[1] - q[1] * r[0])) / 6.0
+    return total
+
+
+def cut_run(c, image, name, arguments, inside=1, extension=".vtu"):
+    """stmesh IMAGE -o NAME.vtu --summary NAME.json ARGUMENTS with a cut stage (volume output):
+    the summary, its tessellate and cut stages, the read-back mesh, stdout and stderr, after
+    checking that they agree: the stages, the cells and points, the cells inside (Material
+    INSIDE) and outside (0), the per-material counts and the line below the table."""
+    output, summary_path = c.path(name + extension), c.path(name + ".json")
+    out, err = c.run_ok([image, "-o", output, "--summary", summary_path] + arguments)
+    summary, mesh = load_summary(summary_path), read_cut(output)
+    check([entry["name"] for entry in summary["stages"]] == STAGES_CUT,
+          "%s: stages %s" % (name, [entry["name"] for entry in summary["stages"]]))
+    check_table(out, STAGES_CUT)
+    check(summary["parameters"]["stop_after"] == "cut", "%s: stop_after %s" %
+          (name, summary["parameters"]["stop_after"]))
+    tessellate, cut = stage(summary, "tessellate"), stage(summary, "cut")
+    check(cut["cells"] == mesh["cells"] and cut["points"] == mesh["points"],
+          "%s: the summary says %d cells, %d points, the file has %d, %d" %
+          (name, cut["cells"], cut["points"], mesh["cells"], mesh["points"]))
+    check(mesh["materials"] is not None and mesh["original"] is not None,
+          "%s: no Material or OriginalMaterial" % name)
+    check(set(mesh["materials"]) <= {inside, 0},
+          "%s: Material values %s, expected %d inside and 0 outside" %
+          (name, sorted(set(mesh["materials"])), inside))
+    inside_cells = mesh["materials"].count(inside)
+    check(cut["inside_cells"] == inside_cells and
+          cut["outside_cells"] == mesh["cells"] - inside_cells,
+          "%s: inside_cells %s, outside_cells %s; the file has %d and %d" %
+          (name, cut["inside_cells"], cut["outside_cells"], inside_cells,
+           mesh["cells"] - inside_cells))
+    key = "triangles_per_material" if TRIANGLE in mesh["types"] else "tetrahedra_per_material"
+    counts = {}
+    for material in mesh["materials"]:
+        counts[str(material)] = counts.get(str(material), 0) + 1
+    check(summary.get(key) == counts, "%s: %s %s, the file has %s" %
+          (name, key, summary.get(key), counts))
+    for figure in ["split_cells", "cut_points"]:
+        check(isinstance(cut[figure], int) and cut[figure] >= 0, "%s: bad %s %s" %
+              (name, figure, cut[figure]))
+    line = "cut: %d split cells, %d cut points; %d inside cells, %d outside cells" % (
+        cut["split_cells"], cut["cut_points"], cut["inside_cells"], cut["outside_cells"])
+    check(line in out.splitlines(), "%s: stdout lacks the line %r" % (name, line))
+    layers = tessellate["boundary_layers"]
+    check(("; %d boundary layer%s" % (layers, "" if layers == 1 else "s")) in out,
+          "%s: stdout does not show the %d boundary layers" % (name, layers))
+    if mesh["cells"]:
+        check(min(mesh["measures"]) > 0, "%s: a cell has measure %r" %
+              (name, min(mesh["measures"])))
+    return summary, tessellate, cut, mesh, out, err
+
+
+def staircase_volume(c, image, name, layers):
+    """The total volume (area) of the staircase mesh with LAYERS background layers."""
+    output = c.path(name + ".vtu")
+    c.run_ok([image, "-o", output, "--boundary-layer", str(layers)] + STAIRCASE)
+    return sum(read_cut(output)["measures"])
+
+
+def case_cut_default(c):
+    image, voxels = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    summary, tessellate, cut, mesh, out, _ = cut_run(c, image, "default", [])
+    check(summary["parameters"] == dict(
+        {"labels": [], "all_labels": True, "max_cell_size": 16, "balance": 1,
+         "stop_after": "cut", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS,
+        **DEFAULT_TESSELLATE_PARAMETERS, **DEFAULT_CUT_PARAMETERS),
+        "bad parameters %s" % summary["parameters"])
+    check(mesh["types"] == {TETRA}, "cell types %s, expected tetrahedra" % mesh["types"])
+    # Every label of the body is inside: Material 1; the tessellation's labels are kept.
+    check(set(mesh["materials"]) == {1, 0}, "Material values %s" % sorted(set(mesh["materials"])))
+    check(set(mesh["original"]) == {0, 1, 3},
+          "OriginalMaterial values %s" % sorted(set(mesh["original"])))
+    check("SeparatingFunction" in mesh["point_arrays"], "no point array SeparatingFunction")
+    # The labels' function brings one background layer; the cut splits cells and adds points
+    # on their edges, keeping every tessellation point.
+    check(tessellate["boundary_layers"] == 1, "boundary_layers %s" % tessellate["boundary_layers"])
+    check(cut["split_cells"] > 0 and cut["cut_points"] > 0, "nothing was cut")
+    check(cut["points"] == tessellate["points"] + cut["cut_points"],
+          "the cut has %d points, the tessellation %d plus %d cut points" %
+          (cut["points"], tessellate["points"], cut["cut_points"]))
+    check(cut["cells"] > tessellate["cells"], "the cut has no more cells than the tessellation")
+    for entry in summary["stages"]:
+        if entry["name"] != "cut":
+            check("split_cells" not in entry, "stage %s has cut figures" % entry["name"])
+    # Volume conservation: the cut covers exactly the domain of the staircase mesh with one
+    # background layer.
+    total = sum(mesh["measures"])
+    staircase = staircase_volume(c, image, "staircase", 1)
+    check(close(total, staircase), "the cut mesh measures %r, the staircase mesh with one "
+          "layer %r" % (total, staircase))
+    # The surface lies within half a voxel of the voxels' boundary.
+    inside = material_volumes(mesh)[1]
+    body = sum(voxels.values())
+    check(0.75 * body < inside < 1.1 * body,
+          "the inside measures %r, the body's voxels %d" % (inside, body))
+    # One label selected: it is the inside Material; several: 1.
+    _, _, _, single, _, _ = cut_run(c, image, "label3", ["--labels", "3"], inside=3)
+    check(set(single["materials"]) == {3, 0}, "--labels 3: Material values %s" %
+          sorted(set(single["materials"])))
+    _, _, _, both, _, _ = cut_run(c, image, "labels13", ["--labels", "3,1"])
+    check(set(both["materials"]) == {1, 0}, "--labels 3,1: Material values %s" %
+          sorted(set(both["materials"])))
+    # Legacy VTK output and an explicit --stop-after cut give the same mesh.
+    _, _, _, legacy, _, _ = cut_run(c, image, "legacy", ["--stop-after", "cut"], extension=".vtk")
+    check(legacy == mesh, "the .vtk cut mesh differs from the .vtu")
+    # --stop-after tessellate writes the tessellation with the function and its layer.
+    output, summary_path = c.path("tessellation.vtu"), c.path("tessellation.json")
+    out, _ = c.run_ok([image, "-o", output, "--summary", summary_path, "--stop-after",
+                       "tessellate"])
+    check_table(out, STAGES_TESSELLATE)
+    tessellation = read_cut(output)
+    check("SeparatingFunction" in tessellation["point_arrays"],
+          "--stop-after tessellate: no point array SeparatingFunction")
+    check(set(tessellation["materials"]) == {0, 1, 3},
+          "--stop-after tessellate: Material values %s" % sorted(set(tessellation["materials"])))
+    check(tessellation["cells"] == tessellate["cells"], "--stop-after tessellate changes the "
+          "tessellation")
+
+
+def case_cut_keep(c):
+    image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    _, _, _, both, _, _ = cut_run(c, image, "both", ["--keep", "both"])
+    summary, _, cut, inside, _, _ = cut_run(c, image, "inside", ["--keep", "inside"])
+    check(summary["parameters"]["keep"] == "inside", "bad keep parameter")
+    check(set(inside["materials"]) == {1}, "--keep inside: Material values %s" %
+          sorted(set(inside["materials"])))
+    check(cut["outside_cells"] == 0, "--keep inside: outside_cells %s" % cut["outside_cells"])
+    _, _, _, outside, _, _ = cut_run(c, image, "outside", ["--keep", "outside"])
+    check(set(outside["materials"]) == {0}, "--keep outside: Material values %s" %
+          sorted(set(outside["materials"])))
+    for name, mesh in [("inside", inside), ("outside", outside)]:
+        check(mesh["points"] < both["points"], "--keep %s: %d points, both sides %d" %
+              (name, mesh["points"], both["points"]))
+    check(inside["cells"] + outside["cells"] == both["cells"],
+          "the sides have %d + %d cells, both %d" % (inside["cells"], outside["cells"],
+                                                    both["cells"]))
+    volumes = material_volumes(both)
+    check(close(sum(inside["measures"]), volumes[1]) and
+          close(sum(outside["measures"]), volumes[0]),
+          "the kept sides measure %r and %r, both sides' %s" %
+          (sum(inside["measures"]), sum(outside["measures"]), volumes))
+    # --iso moves the surface: a negative iso-value shrinks the inside.
+    _, _, _, shrunk, _, _ = cut_run(c, image, "iso", ["--iso", "-0.5", "--keep", "inside"])
+    check(0 < sum(shrunk["measures"]) < sum(inside["measures"]),
+          "--iso -0.5: the inside measures %r, at 0 %r" % (sum(shrunk["measures"]),
+                                                           sum(inside["measures"])))
+
+
+def case_cut_surface(c):
+    image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    _, _, _, volume, _, _ = cut_run(c, image, "volume", [])
+    output, summary_path = c.path("surface.vtp"), c.path("surface.json")
+    out, _ = c.run_ok([image, "-o", output, "--summary", summary_path, "--output-mode",
+                       "surface"])
+    check_table(out, STAGES_CUT)
+    summary = load_summary(summary_path)
+    check(summary["parameters"]["output_mode"] == "surface", "bad output_mode parameter")
+    surface = read_surface(output)
+    cut = stage(summary, "cut")
+    check(surface["types"] == {TRIANGLE}, "surface cell types %s" % surface["types"])
+    check(cut["cells"] == len(surface["cells"]) and cut["points"] == len(surface["points"]),
+          "the summary says %d cells, %d points, the file has %d, %d" %
+          (cut["cells"], cut["points"], len(surface["cells"]), len(surface["points"])))
+    check("inside_cells" not in cut and cut["split_cells"] > 0, "bad cut figures %s" % cut)
+    check("Normals" in surface["cell_arrays"], "the surface has no Normals")
+    counts = {}
+    for material in surface["original"]:
+        counts[str(material)] = counts.get(str(material), 0) + 1
+    check(summary.get("triangles_per_original_material") == counts,
+          "triangles_per_original_material %s, the file has %s" %
+          (summary.get("triangles_per_original_material"), counts))
+    check("cut: %d split cells, %d cut points; a surface of %d triangles" %
+          (cut["split_cells"], cut["cut_points"], cut["cells"]) in out.splitlines(),
+          "stdout lacks the cut line")
+    check_closed_and_oriented(surface, "surface.vtp")
+    # Oriented outward, it encloses exactly the inside of the volume output.
+    enclosed, inside = enclosed_volume(surface), material_volumes(volume)[1]
+    check(close(enclosed, inside), "the surface encloses %r, the volume output's inside "
+          "measures %r" % (enclosed, inside))
+    # Legacy VTK polydata: the same surface.
+    c.run_ok([image, "-o", c.path("surface.vtk"), "--output-mode", "surface"])
+    legacy = read_surface(c.path("surface.vtk"))
+    check(legacy["cells"] == surface["cells"] and legacy["original"] == surface["original"],
+          "the .vtk surface differs from the .vtp")
+    # The default output name of a surface ends in .vtp.
+    subdirectory = c.path("sub")
+    os.mkdir(subdirectory)
+    c.run_ok([image, "--output-mode", "surface"], cwd=subdirectory)
+    check(os.listdir(subdirectory) == ["ball.vtp"],
+          "expected only ball.vtp in the cwd, found %s" % os.listdir(subdirectory))
+
+
+def case_cut_sphere(c):
+    image, _ = write_label_image(c, "big_ball.vti", (25, 25, 25), big_ball)
+    radius = 6.5
+    summary, _, _, mesh, _, _ = cut_run(
+        c, image, "sphere", ["--separating", "sphere:12,12,12,%g" % radius, "--max-cell-size",
+                             "2"])
+    check(summary["parameters"]["separating"] == "sphere:12,12,12,6.5",
+          "bad separating parameter %s" % summary["parameters"]["separating"])
+    check("SeparatingFunction" in mesh["point_arrays"], "no point array SeparatingFunction")
+    # The linear interpolant of the convex |x - c|^2 - R^2 lies above it: the inside is a
+    # polyhedron inscribed in the ball, a little smaller.
+    inside, analytic = material_volumes(mesh)[1], ball_volume(radius)
+    check(0.97 * analytic < inside <= analytic,
+          "the inside measures %r, the ball of radius %g %r" % (inside, radius, analytic))
+    total = sum(mesh["measures"])
+    staircase = staircase_volume(c, image, "staircase", 1)
+    check(close(total, staircase), "the cut mesh measures %r, the staircase mesh with one "
+          "layer %r" % (total, staircase))
+    # The tessellation's labels are kept: the sphere lies inside label 1.
+    check(set(mesh["original"]) == {0, 1}, "OriginalMaterial values %s" %
+          sorted(set(mesh["original"])))
+
+
+def case_cut_smooth(c):
+    image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    _, labels_tessellate, _, labels, _, _ = cut_run(c, image, "labels", [])
+    summary, tessellate, _, mesh, out, _ = cut_run(c, image, "smooth",
+                                                  ["--separating", "smooth:1.5"])
+    check(summary["parameters"]["separating"] == "smooth:1.5", "bad separating parameter")
+    # 1 + ceil(3 sigma / voxel) = 1 + ceil(4.5) layers for the smoothed function's zero set.
+    check(tessellate["boundary_layers"] == 6 > labels_tessellate["boundary_layers"],
+          "boundary_layers %s with smooth:1.5, %s with labels" %
+          (tessellate["boundary_layers"], labels_tessellate["boundary_layers"]))
+    check("; 6 boundary layers" in out, "stdout does not report 6 boundary layers")
+    check(mesh["cells"] > labels["cells"], "smooth:1.5 has no more cells than labels")
+    check(set(mesh["materials"]) == {0, 1}, "Material values %s" % sorted(set(mesh["materials"])))
+    total = sum(mesh["measures"])
+    staircase = staircase_volume(c, image, "staircase", 6)
+    check(close(total, staircase), "the cut mesh measures %r, the staircase mesh with six "
+          "layers %r" % (total, staircase))
+    # --boundary-layer above the function's need wins.
+    _, wide, _, _, _, _ = cut_run(c, image, "wide", ["--separating", "smooth:1.5",
+                                                     "--boundary-layer", "8"])
+    check(wide["boundary_layers"] == 8, "--boundary-layer 8: %s layers" % wide["boundary_layers"])
+
+
+def case_cut_gray(c):
+    image, _ = write_label_image(c, "big_ball.vti", (25, 25, 25), big_ball)
+
+    def gray(i, j, k):
+        # Bright in the centre, 10 gray values darker per mm: 35 at 6.5 mm.
+        return 100.0 - 10.0 * ((i - 12) ** 2 + (j - 12) ** 2 + (k - 12) ** 2) ** 0.5
+
+    meshes = {}
+    for name in ["gray.mha", "gray.vti"]:
+        path = write_gray_image(c, name, (25, 25, 25), gray)
+        summary, _, _, mesh, _, _ = cut_run(
+            c, image, name.replace(".", "_"), ["--separating", "gray:%s:35" % path])
+        check(summary["parameters"]["separating"] == "gray:%s:35" % path,
+              "bad separating parameter %s" % summary["parameters"]["separating"])
+        meshes[name] = mesh
+    check(meshes["gray.mha"] == meshes["gray.vti"], "the .mha and .vti gray images differ")
+    # The gray values are concave in space; their trilinear interpolation in the image and the
+    # linear one on the tetrahedra are averages that lie below them (Jensen): the inside is a
+    # little smaller than the ball where the gray value exceeds 35.
+    mesh = meshes["gray.mha"]
+    inside, analytic = material_volumes(mesh)[1], ball_volume(6.5)
+    check(0.92 * analytic < inside <= analytic,
+          "the inside measures %r, the ball of radius 6.5 %r" % (inside, analytic))
+    total = sum(mesh["measures"])
+    staircase = staircase_volume(c, image, "staircase", 1)
+    check(close(total, staircase), "the cut mesh measures %r, the staircase mesh with one "
+          "layer %r" % (total, staircase))
+    # --iso -10 cuts at the gray value 45 (f = 35 - gray): a ball of radius 5.5.
+    _, _, _, smaller, _, _ = cut_run(c, image, "iso", ["--separating",
+                                                       "gray:%s:35" % c.path("gray.mha"),
+                                                       "--iso", "-10", "--keep", "inside"])
+    inside, analytic = sum(smaller["measures"]), ball_volume(5.5)
+    check(0.92 * analytic < inside <= analytic,
+          "--iso -10: the inside measures %r, the ball of radius 5.5 %r" % (inside, analytic))
+    # An integer image works as a gray image too.
+    _, _, cut, _, _, _ = cut_run(c, image, "labels_as_gray",
+                                 ["--separating", "gray:%s:0.5" % image])
+    check(cut["inside_cells"] > 0, "the label image as gray image: no inside cells")
+
+
+def case_cut_two_dimensional(c):
+    flat = c.make_image("slice.vti", variant="2d")
+    summary, tessellate, _, mesh, _, _ = cut_run(c, flat, "flat", [])
+    check(mesh["types"] == {TRIANGLE}, "2D cut cell types %s" % mesh["types"])
+    check("triangles_per_material" in summary, "no triangles_per_material")
+    total = sum(mesh["measures"])
+    staircase = staircase_volume(c, flat, "staircase", 1)
+    check(close(total, staircase), "the 2D cut mesh measures %r, the staircase mesh with one "
+          "layer %r" % (total, staircase))
+    output, summary_path = c.path("flat_surface.vtp"), c.path("flat_surface.json")
+    out, _ = c.run_ok([flat, "-o", output, "--output-mode", "surface", "--summary",
+                       summary_path])
+    curve = read_surface(output)
+    check(curve["types"] == {3}, "2D surface cell types %s, expected lines" % curve["types"])
+    check_closed_and_oriented(curve, "flat_surface.vtp")
+    cut = stage(load_summary(summary_path), "cut")
+    check("a surface of %d lines" % cut["cells"] in out, "stdout does not count the lines")
+    check("lines_per_original_material" in load_summary(summary_path),
+          "no lines_per_original_material")
+
+
+def case_cut_warnings(c):
+    image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    # The cut options do nothing without a cut stage, and say so.
+    plain = c.path("plain.vtu")
+    c.run_ok([image, "-o", plain] + STAIRCASE)
+    ignored = c.path("ignored.vtu")
+    _, err = c.run_ok([image, "-o", ignored, "--output-mode", "volume", "--keep", "inside",
+                       "--iso", "1"] + STAIRCASE)
+    for option in ["--output-mode", "--keep", "--iso"]:
+        check("stmesh: warning: %s applies to the cut stage only; ignored with --separating none"
+              % option in err, "no warning that %s is ignored" % option)
+    check(read_cut(ignored) == read_cut(plain), "ignored cut options changed the mesh")
+    _, err = c.run_ok([image, "-o", c.path("early.vtu"), "--stop-after", "tessellate", "--keep",
+                       "inside"])
+    check("stmesh: warning: --keep applies to the cut stage only; ignored with --stop-after "
+          "tessellate" in err, "no warning that --keep is ignored with --stop-after tessellate")
+    _, err = c.run_ok([image, "-o", c.path("surface.vtp"), "--output-mode", "surface", "--keep",
+                       "inside"])
+    check("stmesh: warning: --keep applies to volume output only; ignored with --output-mode "
+          "surface" in err, "no warning that --keep is ignored with surface output")
+    # A separating function that the run stops before.
+    for arguments, text in [
+            (["--separating", "sphere:9,9,8,3", "--stop-after", "tessellate"],
+             "stmesh: warning: --separating sphere:9,9,8,3 is ignored with --stop-after "
+             "tessellate (the tessellation carries the labels' function)"),
+            (["--separating", "smooth:1", "--stop-after", "balance"],
+             "stmesh: warning: --separating smooth:1 is ignored with --stop-after balance")]:
+        _, err = c.run_ok([image, "-o", c.path("stopped.vtu")] + arguments)
+        check(text in err, "no warning %r" % text)
+    _, err = c.run_ok([image, "-o", c.path("stopped.vtu"), "--separating", "smooth:1",
+                       "--stop-after", "tessellate"])
+    check("warning" not in err, "unexpected warning %r" % err)
+    # No warning in a plain run.
+    _, err = c.run_ok([image, "-o", c.path("default.vtu")])
+    check("warning" not in err, "unexpected warning %r" % err)
+    # A sphere that misses the mesh: an empty inside, and a warning.
+    _, _, cut, _, _, err = cut_run(c, image, "missed", ["--separating", "sphere:100,100,100,2"])
+    check(cut["inside_cells"] == 0, "a sphere outside the mesh has inside cells")
+    check("stmesh: warning: the separating surface (--separating sphere:100,100,100,2) encloses "
+          "no part of the mesh" in err, "no warning about an empty inside")
+    # Non-simplicial elements are fine when the run stops before the cut.
+    c.run_ok([image, "-o", c.path("hybrid.vtu"), "--elements", "hybrid", "--stop-after",
+              "tessellate"])
+
+
+def case_error_cut_option_values(c):
+    image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    output = c.path("out.vtu")
+    for arguments, text in [
+            (["--separating", "foo"], "--separating: 'foo' is not one of labels, smooth:SIGMA, "
+             "gray:FILE:ISO, sphere:CX,CY,CZ,R or none"),
+            (["--separating", ""], "--separating: '' is not one of"),
+            (["--separating", "labels:2"], "--separating: 'labels:2' is not one of"),
+            (["--separating", "Labels"], "--separating: 'Labels' is not one of"),
+            (["--separating", "smooth"], "--separating: smooth needs the Gaussian's sigma"),
+            (["--separating", "smooth:-1"], "--separating: smooth SIGMA must be positive, got -1"),
+            (["--separating", "smooth:0"], "--separating: smooth SIGMA must be positive, got 0"),
+            (["--separating", "smooth:abc"], "--separating: smooth SIGMA: 'abc' is not a number"),
+            (["--separating", "smooth:"], "--separating: smooth SIGMA needs a number"),
+            (["--separating", "smooth:nan"], "--separating: smooth SIGMA: 'nan' is not a number"),
+            (["--separating", "smooth:2000"], "--separating: smooth SIGMA 2000 is out of range"),
+            (["--separating", "sphere"], "--separating: sphere needs its centre and radius"),
+            (["--separating", "sphere:1,2"], "--separating: sphere:CX,CY,CZ,R needs 4 numbers, "
+             "got 2"),
+            (["--separating", "sphere:1,2,3,4,5"], "--separating: sphere:CX,CY,CZ,R needs 4 "
+             "numbers, got 5"),
+            (["--separating", "sphere:1,2,x,4"], "--separating: sphere: 'x' is not a number"),
+            (["--separating", "sphere:1,,3,4"], "--separating: sphere: empty entry"),
+            (["--separating", "sphere:1,2,3,0"], "--separating: the sphere radius must be "
+             "positive, got 0"),
+            (["--separating", "gray"], "--separating: 'gray' is not gray:FILE:ISO"),
+            (["--separating", "gray:t1.mha"], "--separating: 'gray:t1.mha' is not gray:FILE:ISO"),
+            (["--separating", "gray::3"], "--separating: gray:FILE:ISO needs a file name"),
+            (["--separating", "gray:t1.mha:x"], "--separating: gray ISO: 'x' is not a number"),
+            (["--separating", "none", "--separating", "labels"],
+             "--separating given more than once"),
+            (["--separating"], "--separating needs a value"),
+            (["--output-mode", "both"], "--output-mode: 'both' is not one of volume, surface"),
+            (["--keep", "all"], "--keep: 'all' is not one of both, inside, outside"),
+            (["--iso", "abc"], "--iso: 'abc' is not a number"),
+            (["--iso", "inf"], "--iso: 'inf' is not a number"),
+            (["--iso", ""], "--iso needs a number"),
+            (["--stop-after", "cutting"], "--stop-after: 'cutting' is not one of spacetree, "
+             "balance, tessellate, cut"),
+            (["--stop-after", "cut", "--separating", "none"],
+             "--stop-after cut needs a separating function"),
+            (["--elements", "hybrid"], "--elements hybrid: cutting at the separating function "
+             "(--separating labels) needs simplicial elements; give --separating none"),
+            (["--elements", "leaves", "--separating", "smooth:1"],
+             "--elements leaves: cutting at the separating function (--separating smooth:1) "
+             "needs simplicial elements"),
+            (["--elements", "hybrid", "--stop-after", "cut"],
+             "--elements hybrid: cutting at the separating function")]:
+        err = c.run_failing([image, "-o", output] + arguments, 2, text, output=output)
+        error_lines = [line for line in err.splitlines() if line.startswith(ERROR_PREFIX)]
+        check(len(error_lines) == 1 and error_lines[0].startswith(ERROR_PREFIX + " " + text),
+              "expected one error line starting with %r, got %s" % (text, error_lines))
+        check("--help" in err, "usage errors should point to --help")
+    # The output's extension must fit the output mode.
+    for name, arguments, text in [
+            ("x.vtu", ["--output-mode", "surface"], "--output-mode surface writes a surface "
+             "(polydata), not an unstructured grid; use .vtp (VTK XML polydata) or .vtk"),
+            ("x.stl", ["--output-mode", "surface"], "unsupported extension; use .vtp (VTK XML "
+             "polydata) or .vtk (legacy VTK) for --output-mode surface"),
+            ("x.vtp", [], ".vtp holds polydata, but the output is an unstructured grid; use .vtu"),
+            ("x.vtp", ["--output-mode", "surface"] + STAIRCASE,
+             "(--output-mode surface is ignored with --separating none)"),
+            ("x.vtp", ["--output-mode", "surface", "--stop-after", "tessellate"],
+             "(--output-mode surface is ignored with --stop-after tessellate)")]:
+        err = c.run_failing([image, "-o", c.path(name)] + arguments, 2, text,
+                            output=c.path(name))
+        check("--help" in err, "usage errors should point to --help")
+    # The --name=value form parses the same way.
+    c.run_failing([image, "-o", output, "--separating=smooth:-1"], 2,
+                  "--separating: smooth SIGMA must be positive", output=output)
+
+
+def case_error_cut_files(c):
+    image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    output = c.path("out.vtu")
+    for separating, text in [
+            ("gray:%s:3" % c.path("missing.mha"),
+             "--separating: cannot read gray image '%s': No such file or directory" %
+             c.path("missing.mha")),
+            ("gray:%s:3" % c.path("gray.png"), "--separating: gray image '%s' has an "
+             "unsupported extension" % c.path("gray.png"))]:
+        err = c.run_failing([image, "-o", output, "--separating", separating], 1, text,
+                            output=output)
+        check("--help" not in err, "a file error should not point to --help")
+    # A corrupt gray image fails when it is read, before the cut, naming the file.
+    corrupt = c.path("corrupt.mha")
+    with open(corrupt, "wb") as image_file:
+        image_file.write(random.Random(11).randbytes(300))
+    c.run_failing([image, "-o", output, "--separating", "gray:%s:3" % corrupt], 1, "corrupt.mha",
+                  output=output)
+    # A gray image of several components.
+    vtk = cut_vtk_modules()
+    colour = vtk["vtkImageData"]()
+    colour.SetDimensions(16, 15, 14)
+    colour.AllocateScalars(10, 3)
+    errors = []
+    writer = watched(vtk["vtkXMLImageDataWriter"](), errors)
+    writer.SetDataModeToBinary()
+    writer.SetInputData(colour)
+    writer.SetFileName(c.path("colour.vti"))
+    writer.Write()
+    check(not errors, "cannot write colour.vti")
+    c.run_failing([image, "-o", output, "--separating", "gray:%s:3" % c.path("colour.vti")], 1,
+                  "3 components per voxel; stmesh needs one gray value per voxel", output=output)
 
 
 def main():

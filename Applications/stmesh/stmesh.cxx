@@ -3,9 +3,12 @@
  * stmesh: the command-line front end of SpacetreeMesh.
  *
  * Reads a segmented (label) image, runs stmImageToSpacetree, stmSpacetreeBalance and
- * stmSpacetreeTessellate (tetrahedra, a hybrid mesh or the leaf cells), and writes the result as
- * a .vtu or legacy .vtk file, printing a per-stage table of wall time, output size and peak
- * memory. Run `stmesh --help` for the usage.
+ * stmSpacetreeTessellate (tetrahedra, a hybrid mesh or the leaf cells) and, unless --separating
+ * none, cuts the tetrahedra at a separating function with stmMarchingSimplices (the function of
+ * the labels, optionally smoothed, computed by stmSpacetreeTessellate, or one of
+ * stmSeparatingFunction: a gray image against an iso-value, or a sphere). It writes the result
+ * as a .vtu or legacy .vtk file (the cut's surface as .vtp or .vtk), printing a per-stage table
+ * of wall time, output size and peak memory. Run `stmesh --help` for the usage.
  *
  * Error policy: every failure (bad command line, unreadable or corrupt input, filter error,
  * write error) ends with messages on stderr that start with "stmesh: error:" and exit code 2 for
@@ -17,6 +20,8 @@
  */
 
 #include "stmImageToSpacetree.h"
+#include "stmMarchingSimplices.h"
+#include "stmSeparatingFunction.h"
 #include "stmSpacetreeBalance.h"
 #include "stmSpacetreeTessellate.h"
 
@@ -44,7 +49,10 @@
 #include "vtkOutputWindow.h"
 #include "vtkPlane.h"
 #include "vtkPointData.h"
+#include "vtkPointSet.h"
 #include "vtkPoints.h"
+#include "vtkPolyData.h"
+#include "vtkPolyDataWriter.h"
 #include "vtkSMPTools.h"
 #include "vtkSmartPointer.h"
 #include "vtkSphere.h"
@@ -55,6 +63,7 @@
 #include "vtkVariant.h"
 #include "vtkVersion.h"
 #include "vtkXMLImageDataReader.h"
+#include "vtkXMLPolyDataWriter.h"
 #include "vtkXMLUnstructuredGridWriter.h"
 
 #include <sys/resource.h>
@@ -109,21 +118,27 @@ const char* const UsageText =
               [--balance-label L:LEVEL,...] [--balance-region REGION:LEVEL]
               [--elements simplicial|hybrid|leaves] [--templates midpoint|regular|extended]
               [--cell-template checkerboard|kuhn] [--boundary-layer N]
-              [--stop-after spacetree|balance|tessellate] [--threads N] [--summary FILE.json]
-              [--compressor lz4|zlib|none]
+              [--separating labels|smooth:SIGMA|gray:FILE:ISO|sphere:CX,CY,CZ,R|none]
+              [--output-mode volume|surface] [--keep both|inside|outside] [--iso V]
+              [--stop-after spacetree|balance|tessellate|cut] [--threads N]
+              [--summary FILE.json] [--compressor lz4|zlib|none]
        stmesh -h|--help
        stmesh --version
 
 Mesh a segmented (label) image with SpacetreeMesh: build the spacetree of the labels, balance
-it, and tessellate it into a conforming tetrahedral (or hybrid) mesh, or output its leaf cells,
-with a cell array "Material".
+it, tessellate it into a conforming tetrahedral mesh and cut that mesh at a separating surface
+(by default the smooth boundary of the labels' voxels), with a cell array "Material". With
+--separating none the mesh keeps the voxel staircase: tetrahedra, a hybrid mesh or the leaf
+cells, with the labels as "Material".
 
 Arguments:
   INPUT                 label image: .nii, .nii.gz (NIfTI), .mha, .mhd (MetaImage), .nrrd, .nhdr
                         (NRRD) or .vti (VTK XML image); integer scalars. Default:
                         /usr/share/mricron/templates/aal.nii.gz (Debian package mricron-data).
-  -o OUTPUT             .vtu (VTK XML, inline binary) or .vtk (legacy VTK, binary). Default:
-                        the input's base name with .vtu, in the current directory.
+  -o OUTPUT             .vtu (VTK XML, inline binary) or .vtk (legacy VTK, binary); with
+                        --output-mode surface .vtp (VTK XML polydata, inline binary) or .vtk.
+                        Default: the input's base name with .vtu (.vtp for a surface), in the
+                        current directory.
   --labels L1,L2,...    labels that form the body of interest. Default: every non-zero label.
   --max-cell-size N     largest leaf edge in voxels, 1 to 1048576. Default 16.
   --balance L           largest level difference between adjacent leaves, 1 to 20; 0 skips
@@ -165,7 +180,8 @@ Arguments:
                         tetrahedra, triangles in 2D), hybrid (conforming hexahedra, pyramids
                         and tetrahedra; quads and triangles in 2D) or leaves (the leaf cells as
                         hexahedra or quads, with hanging nodes marked by the point array
-                        "HangingNode").
+                        "HangingNode"). Cutting needs simplicial elements: hybrid and leaves
+                        need --separating none (or --stop-after tessellate or earlier).
   --templates T         how simplicial output triangulates the leaves and their faces: midpoint
                         (the centre of every face joined to its facets), regular (the default:
                         faces without extra vertices on their boundary take the cell template)
@@ -177,16 +193,48 @@ Arguments:
                         tetrahedra around the main diagonal). Only for simplicial output, like
                         --templates.
   --boundary-layer N    also output N layers of background leaves around the body (Material 0,
-                        the background label), 0 to 100. Default 0.
-  --stop-after STAGE    write the output of spacetree, balance or tessellate (the default).
+                        the background label), 0 to 100. Default 0. A separating function
+                        adds the layers its surface needs (1 for labels, 1 + 3 SIGMA / voxel
+                        size for smooth).
+  --separating F        the separating function whose zero set the cut stage follows (negative
+                        inside), one of:
+                          labels         the default: the labels' voxels, interpolated
+                                         between the voxel centres
+                          smooth:SIGMA   the same, smoothed by a Gaussian of SIGMA > 0 (mm,
+                                         0.01 to 1000)
+                          gray:FILE:ISO  the gray image FILE (any INPUT format, any scalar
+                                         type, in the label image's physical space) where
+                                         brighter than ISO is inside
+                          sphere:CX,CY,CZ,R
+                                         the ball of centre CX,CY,CZ and radius R > 0 (mm)
+                          none           no cut stage: the staircase mesh of the voxels
+                        labels and smooth also give --stop-after tessellate the point array
+                        "SeparatingFunction" and its background layers; gray and sphere act in
+                        the cut stage only (their tessellation has the labels' function).
+  --output-mode M       the cut's output: volume (the default: the tetrahedra on both sides,
+                        "Material" the body label (the label of --labels if it gives one, else
+                        1) inside and 0 outside, "OriginalMaterial" the tessellation's label)
+                        or surface (the separating surface as triangles, lines in 2D, oriented
+                        outward).
+  --keep K              the tetrahedra the volume output keeps: both (the default), inside or
+                        outside.
+  --iso V               cut where the separating function equals V instead of 0 (for gray:
+                        where the gray value is ISO - V).
+                        --output-mode, --keep and --iso apply to the cut stage only; they are
+                        ignored, with a warning, with --separating none or an earlier
+                        --stop-after.
+  --stop-after STAGE    write the output of spacetree, balance, tessellate or cut. Default: cut,
+                        or tessellate with --separating none.
   --threads N           number of threads, 1 to 4096. Default: all cores, or VTK_SMP_MAX_THREADS.
                         The STDThread backend is used unless VTK_SMP_BACKEND_IN_USE is set.
   --summary FILE.json   also write the per-stage figures (for tessellate also the inserted
-                        points, the cells per type and, for hybrid and leaves output, the
-                        volume fraction of the hexahedra), the spacetree's cell size per level
-                        (in voxels) and the per-material counts as JSON.
-  --compressor C        compression of .vtu files: lz4 (the default, fastest), zlib (files
-                        about 2.3 times smaller, written about 1 s slower per 5 million
+                        points, the cells per type, the boundary layers and, for hybrid and
+                        leaves output, the volume fraction of the hexahedra; for cut the split
+                        cells, the cut points and the inside and outside cells), the
+                        spacetree's cell size per level (in voxels) and the per-material counts
+                        as JSON.
+  --compressor C        compression of .vtu and .vtp files: lz4 (the default, fastest), zlib
+                        (files about 2.3 times smaller, written about 1 s slower per 5 million
                         tetrahedra) or none.
   -h, --help            show this help and exit.
   --version             show the version and exit.
@@ -326,7 +374,8 @@ const char* ImageFormatName(ImageFormat format)
 enum class MeshFormat
 {
   XMLUnstructuredGrid,
-  LegacyVTK
+  LegacyVTK,
+  XMLPolyData // the cut's surface only
 };
 
 bool FindMeshFormat(const std::string& path, MeshFormat& format)
@@ -335,6 +384,11 @@ bool FindMeshFormat(const std::string& path, MeshFormat& format)
   if (lower.size() > 4 && EndsWith(lower, ".vtu"))
   {
     format = MeshFormat::XMLUnstructuredGrid;
+    return true;
+  }
+  if (lower.size() > 4 && EndsWith(lower, ".vtp"))
+  {
+    format = MeshFormat::XMLPolyData;
     return true;
   }
   if (lower.size() > 4 && EndsWith(lower, ".vtk"))
@@ -352,7 +406,8 @@ enum class StopStage
 {
   Spacetree,
   Balance,
-  Tessellate
+  Tessellate,
+  Cut
 };
 
 const char* StopStageName(StopStage stage)
@@ -365,6 +420,8 @@ const char* StopStageName(StopStage stage)
       return "balance";
     case StopStage::Tessellate:
       return "tessellate";
+    case StopStage::Cut:
+      return "cut";
   }
   return "?";
 }
@@ -384,6 +441,10 @@ const NamedValue TemplateRules[] = { { "midpoint", stmSpacetreeTessellate::MIDPO
   { "extended", stmSpacetreeTessellate::EXTENDED } };
 const NamedValue CellTemplates[] = { { "checkerboard", stmSpacetreeTessellate::CHECKERBOARD },
   { "kuhn", stmSpacetreeTessellate::KUHN } };
+const NamedValue OutputModes[] = { { "volume", stmMarchingSimplices::VOLUME },
+  { "surface", stmMarchingSimplices::SURFACE } };
+const NamedValue KeptSides[] = { { "both", stmMarchingSimplices::BOTH },
+  { "inside", stmMarchingSimplices::INSIDE }, { "outside", stmMarchingSimplices::OUTSIDE } };
 
 /// The value of a keyword option (--elements, --templates, --cell-template), by its name.
 template <std::size_t N>
@@ -425,6 +486,26 @@ struct RegionOption
   int Level = 0;              // --balance-region: the balance level
 };
 
+/// --separating: the function the cut stage follows.
+enum class SeparatingKind
+{
+  None,   // no cut stage
+  Labels, // stmSpacetreeTessellate LABELS
+  Smooth, // stmSpacetreeTessellate SMOOTHED_LABELS
+  Gray,   // stmSeparatingFunction GRAY_IMAGE
+  Sphere  // stmSeparatingFunction IMPLICIT_FUNCTION with a vtkSphere
+};
+
+struct SeparatingOption
+{
+  SeparatingKind Kind = SeparatingKind::Labels;
+  std::string Text = "labels"; // as given, for the summary
+  double Sigma = 0.0;          // smooth: mm
+  std::string GrayImage;       // gray: the image file
+  double GrayIso = 0.0;        // gray: the threshold
+  std::vector<double> Sphere;  // sphere: CX, CY, CZ, R
+};
+
 struct Options
 {
   bool ShowHelp = false;
@@ -452,6 +533,20 @@ struct Options
   std::string SizingArray;
   std::vector<std::pair<int, int>> LabelBalanceLevels;
   RegionOption BalanceRegion;
+  SeparatingOption Separating;                   // --separating
+  int OutputMode = stmMarchingSimplices::VOLUME; // --output-mode
+  int KeepSide = stmMarchingSimplices::BOTH;     // --keep
+  double IsoValue = 0.0;                         // --iso
+  std::vector<std::string> CutOnlyOptions;       // --output-mode, --keep, --iso if given
+  bool SeparatingGiven = false;
+  bool StopAfterGiven = false;
+
+  /// Whether the cut stage runs, and whether it writes the surface (a vtkPolyData).
+  bool Cuts() const { return this->StopAfter == StopStage::Cut; }
+  bool WritesSurface() const
+  {
+    return this->Cuts() && this->OutputMode == stmMarchingSimplices::SURFACE;
+  }
 };
 
 // strtoll skips leading blanks and stops at the first non-digit, so "3x", " 3" or "" would slip
@@ -806,6 +901,85 @@ RegionOption ParseRegion(const std::string& text, const std::string& what, bool 
   return region;
 }
 
+/// --separating labels|smooth:SIGMA|gray:FILE:ISO|sphere:CX,CY,CZ,R|none.
+SeparatingOption ParseSeparating(const std::string& text)
+{
+  const std::string what = "--separating";
+  const std::string choices = "labels, smooth:SIGMA, gray:FILE:ISO, sphere:CX,CY,CZ,R or none";
+  SeparatingOption separating;
+  separating.Text = text;
+  const std::size_t colon = text.find(':');
+  const std::string type = text.substr(0, colon);
+  const std::string rest = colon == std::string::npos ? std::string() : text.substr(colon + 1);
+  if ((type == "labels" || type == "none") && colon == std::string::npos)
+  {
+    separating.Kind = type == "labels" ? SeparatingKind::Labels : SeparatingKind::None;
+    return separating;
+  }
+  if (type == "smooth")
+  {
+    if (colon == std::string::npos)
+    {
+      throw UsageError(what + ": smooth needs the Gaussian's sigma in mm, as in smooth:1.5");
+    }
+    separating.Kind = SeparatingKind::Smooth;
+    separating.Sigma = ParseReal(Trim(rest), what + ": smooth SIGMA");
+    if (!(separating.Sigma > 0))
+    {
+      throw UsageError(what + ": smooth SIGMA must be positive, got " + Trim(rest));
+    }
+    if (separating.Sigma < 0.01 || separating.Sigma > 1000)
+    {
+      throw UsageError(
+        what + ": smooth SIGMA " + Trim(rest) + " is out of range (0.01 to 1000 mm)");
+    }
+    return separating;
+  }
+  if (type == "gray")
+  {
+    // The file name may hold colons; the iso-value follows the last one.
+    const std::size_t last = text.rfind(':');
+    if (colon == std::string::npos || last == colon)
+    {
+      throw UsageError(
+        what + ": '" + text + "' is not gray:FILE:ISO (for example gray:t1.nii.gz:300)");
+    }
+    separating.Kind = SeparatingKind::Gray;
+    separating.GrayImage = text.substr(colon + 1, last - colon - 1);
+    if (separating.GrayImage.empty())
+    {
+      throw UsageError(what + ": gray:FILE:ISO needs a file name, got '" + text + "'");
+    }
+    separating.GrayIso = ParseReal(Trim(text.substr(last + 1)), what + ": gray ISO");
+    return separating;
+  }
+  if (type == "sphere")
+  {
+    if (colon == std::string::npos)
+    {
+      throw UsageError(what + ": sphere needs its centre and radius, as in sphere:0,-20,10,15");
+    }
+    separating.Kind = SeparatingKind::Sphere;
+    const std::vector<std::string> items =
+      SplitList(rest, ',', what + ": sphere", "the numbers of sphere:CX,CY,CZ,R");
+    for (const std::string& item : items)
+    {
+      separating.Sphere.push_back(ParseReal(item, what + ": sphere"));
+    }
+    if (separating.Sphere.size() != 4)
+    {
+      throw UsageError(what + ": sphere:CX,CY,CZ,R needs 4 numbers, got " +
+        std::to_string(separating.Sphere.size()));
+    }
+    if (!(separating.Sphere[3] > 0))
+    {
+      throw UsageError(what + ": the sphere radius must be positive, got " + items.back());
+    }
+    return separating;
+  }
+  throw UsageError(what + ": '" + text + "' is not one of " + choices);
+}
+
 Options ParseCommandLine(int argc, char* argv[])
 {
   Options options;
@@ -861,7 +1035,7 @@ Options ParseCommandLine(int argc, char* argv[])
       "--balance", "--stop-after", "--threads", "--summary", "--compressor", "--pattern",
       "--root-cell-size", "--max-cell-size-label", "--refine-region", "--grading", "--sizing-array",
       "--balance-label", "--balance-region", "--elements", "--templates", "--cell-template",
-      "--boundary-layer" };
+      "--boundary-layer", "--separating", "--output-mode", "--keep", "--iso" };
     if (valueOptions.count(name) == 0)
     {
       throw UsageError("unknown option '" + name + "'");
@@ -901,6 +1075,7 @@ Options ParseCommandLine(int argc, char* argv[])
     }
     else if (name == "--stop-after")
     {
+      options.StopAfterGiven = true;
       if (value == "spacetree")
       {
         options.StopAfter = StopStage::Spacetree;
@@ -913,11 +1088,35 @@ Options ParseCommandLine(int argc, char* argv[])
       {
         options.StopAfter = StopStage::Tessellate;
       }
+      else if (value == "cut")
+      {
+        options.StopAfter = StopStage::Cut;
+      }
       else
       {
         throw UsageError(
-          "--stop-after: '" + value + "' is not one of spacetree, balance, tessellate");
+          "--stop-after: '" + value + "' is not one of spacetree, balance, tessellate, cut");
       }
+    }
+    else if (name == "--separating")
+    {
+      options.Separating = ParseSeparating(value);
+      options.SeparatingGiven = true;
+    }
+    else if (name == "--output-mode")
+    {
+      options.OutputMode = ParseKeyword(value, name, OutputModes);
+      options.CutOnlyOptions.push_back(name);
+    }
+    else if (name == "--keep")
+    {
+      options.KeepSide = ParseKeyword(value, name, KeptSides);
+      options.CutOnlyOptions.push_back(name);
+    }
+    else if (name == "--iso")
+    {
+      options.IsoValue = ParseReal(value, name);
+      options.CutOnlyOptions.push_back(name);
     }
     else if (name == "--elements")
     {
@@ -1012,11 +1211,52 @@ Options ParseCommandLine(int argc, char* argv[])
       " needs balancing and cannot be combined with --balance 0");
   }
 
+  // The cut stage: the last one by default when there is a separating function.
+  const bool separates = options.Separating.Kind != SeparatingKind::None;
+  if (!options.StopAfterGiven)
+  {
+    options.StopAfter = separates ? StopStage::Cut : StopStage::Tessellate;
+  }
+  else if (options.StopAfter == StopStage::Cut && !separates)
+  {
+    throw UsageError("--stop-after cut needs a separating function, but --separating is none; "
+                     "give --stop-after tessellate or another --separating");
+  }
+  if (options.Cuts() && options.Elements != stmSpacetreeTessellate::SIMPLICIAL)
+  {
+    throw UsageError(std::string("--elements ") + KeywordName(options.Elements, ElementKinds) +
+      ": cutting at the separating function (--separating " + options.Separating.Text +
+      ") needs simplicial elements; give --separating none for a " +
+      KeywordName(options.Elements, ElementKinds) + " mesh of the voxels");
+  }
+
   MeshFormat format;
+  const char* const extensions = options.WritesSurface()
+    ? "use .vtp (VTK XML polydata) or .vtk (legacy VTK) for --output-mode surface"
+    : "use .vtu (VTK XML) or .vtk (legacy VTK)";
   if (!options.Output.empty() && !FindMeshFormat(options.Output, format))
   {
+    throw UsageError("output '" + options.Output + "' has an unsupported extension; " + extensions);
+  }
+  if (!options.Output.empty() && options.WritesSurface() &&
+    format == MeshFormat::XMLUnstructuredGrid)
+  {
     throw UsageError("output '" + options.Output +
-      "' has an unsupported extension; use .vtu (VTK XML) or .vtk (legacy VTK)");
+      "': --output-mode surface writes a surface (polydata), not an unstructured grid; " +
+      extensions);
+  }
+  if (!options.Output.empty() && !options.WritesSurface() && format == MeshFormat::XMLPolyData)
+  {
+    std::string reason = "the output is an unstructured grid";
+    if (options.OutputMode == stmMarchingSimplices::SURFACE)
+    {
+      reason += std::string(" (--output-mode surface is ignored with ") +
+        (separates ? "--stop-after " + std::string(StopStageName(options.StopAfter))
+                   : std::string("--separating none")) +
+        ")";
+    }
+    throw UsageError(
+      "output '" + options.Output + "': .vtp holds polydata, but " + reason + "; " + extensions);
   }
   return options;
 }
@@ -1340,7 +1580,16 @@ struct StageReport
   long long InsertedPoints = -1;
   std::vector<std::pair<std::string, long long>> CellsByType;
   double HexahedronVolumeFraction = -1.0;
-  bool TwoDimensional = false; // triangles and quads
+  bool TwoDimensional = false;     // triangles and quads
+  int BoundaryLayers = -1;         // the background layers output; -1: not reported
+  bool ShowBoundaryLayers = false; // print them below the table (with a separating function)
+  // The cut stage only (Cut true): the input cells split, the points added on cut edges, and
+  // for volume output the cells inside and outside (-1 for surface output).
+  bool Cut = false;
+  long long SplitCells = -1;
+  long long CutPoints = -1;
+  long long InsideCells = -1;
+  long long OutsideCells = -1;
 };
 
 double PeakRssMiB()
@@ -1427,24 +1676,33 @@ struct ImageInfo
   std::vector<int> SpannedAxes;         // the axes with more than one voxel
 };
 
-void CheckReadableFile(const std::string& path)
+/// The image file is there and readable: the input (gray false) or the gray image of
+/// --separating gray.
+void CheckReadableFile(const std::string& path, bool gray = false)
 {
+  const std::string prefix = gray ? "--separating: " : "";
+  const std::string what = gray ? "gray image" : "input";
+  if (!FindImageFormat(path))
+  {
+    throw Failure(prefix + what + " '" + path + "' has an unsupported extension; stmesh reads " +
+      SupportedInputExtensions);
+  }
   struct stat info;
   if (stat(path.c_str(), &info) != 0)
   {
-    throw Failure("cannot read input '" + path + "': " + std::strerror(errno));
+    throw Failure(prefix + "cannot read " + what + " '" + path + "': " + std::strerror(errno));
   }
   if (S_ISDIR(info.st_mode))
   {
-    throw Failure("input '" + path + "' is a directory, not an image file");
+    throw Failure(prefix + what + " '" + path + "' is a directory, not an image file");
   }
   if (access(path.c_str(), R_OK) != 0)
   {
-    throw Failure("cannot read input '" + path + "': " + std::strerror(errno));
+    throw Failure(prefix + "cannot read " + what + " '" + path + "': " + std::strerror(errno));
   }
   if (info.st_size == 0)
   {
-    throw Failure("input '" + path + "' is empty");
+    throw Failure(prefix + what + " '" + path + "' is empty");
   }
 }
 
@@ -1484,18 +1742,14 @@ vtkSmartPointer<vtkAlgorithm> CreateCheckedReader(
   return reader;
 }
 
-/// Read the label image; the returned copy no longer depends on the reader.
+/// Read the label image (labelImage) or the gray image of --separating gray; the returned copy
+/// no longer depends on the reader.
 vtkSmartPointer<vtkImageData> ReadImage(
-  const std::string& path, ImageInfo& info, StageReport& report)
+  const std::string& path, ImageInfo& info, StageReport& report, bool labelImage = true)
 {
   const std::string context = "reading '" + path + "'";
   const ImageFormatInfo* format = FindImageFormat(path);
-  if (!format)
-  {
-    throw Failure("input '" + path + "' has an unsupported extension; stmesh reads " +
-      SupportedInputExtensions);
-  }
-  CheckReadableFile(path);
+  CheckReadableFile(path, !labelImage);
 
   vtkSmartPointer<vtkAlgorithm> reader;
   StandardErrorCapture strayMessages;
@@ -1531,9 +1785,14 @@ vtkSmartPointer<vtkImageData> ReadImage(
   }
   image->GetDimensions(info.Dimensions);
   image->GetSpacing(info.Spacing);
-  // The spacetree filter reads the active scalars, point data first.
+  // The spacetree filter reads the active scalars, point data first; stmSeparatingFunction the
+  // active point scalars only.
   vtkDataArray* labels = image->GetPointData()->GetScalars();
   vtkIdType expectedValues = image->GetNumberOfPoints();
+  if (!labels && !labelImage)
+  {
+    throw Failure(context + ": the gray image has no point scalars (one gray value per voxel)");
+  }
   if (!labels)
   {
     labels = image->GetCellData()->GetScalars();
@@ -1562,9 +1821,10 @@ vtkSmartPointer<vtkImageData> ReadImage(
   if (labels->GetNumberOfComponents() != 1)
   {
     throw Failure(context + ": the image has " + std::to_string(labels->GetNumberOfComponents()) +
-      " components per voxel; stmesh needs one integer label per voxel");
+      " components per voxel; stmesh needs one " + (labelImage ? "integer label" : "gray value") +
+      " per voxel");
   }
-  if (!stmImageToSpacetree::IsLabelType(labels->GetDataType()))
+  if (labelImage && !stmImageToSpacetree::IsLabelType(labels->GetDataType()))
   {
     throw Failure(context + ": the image holds " + info.ScalarType +
       " values; stmesh needs an integer label image (a segmentation, not a gray-value image)");
@@ -1576,7 +1836,8 @@ vtkSmartPointer<vtkImageData> ReadImage(
     if ((slope != 0.0 && slope != 1.0) || intercept != 0.0)
     {
       Diagnostics() << "stmesh: warning: " << path << ": scl_slope " << slope << " and scl_inter "
-                    << intercept << " are ignored; the labels are the stored values\n";
+                    << intercept << " are ignored; the " << (labelImage ? "labels" : "gray values")
+                    << " are the stored values\n";
     }
   }
 
@@ -1596,23 +1857,38 @@ vtkSmartPointer<vtkImageData> ReadImage(
 // previous filter (and, once unreferenced, its data) can be freed; this keeps the peak memory
 // near two stages' worth instead of all of them.
 
-vtkSmartPointer<vtkUnstructuredGrid> RunStage(vtkAlgorithm* filter, vtkDataObject* input,
-  const std::string& context, StageReport& report, bool isSpacetree)
+/// Runs one filter on input port 0 and returns a copy of its output (a vtkUnstructuredGrid, or
+/// the cut's surface as a vtkPolyData); adds its wall time to the report.
+vtkSmartPointer<vtkPointSet> RunFilter(
+  vtkAlgorithm* filter, vtkDataObject* input, const std::string& context, StageReport& report)
 {
   Watch(filter);
   filter->SetInputDataObject(0, input);
-  report.Seconds = TimedUpdate(filter);
+  report.Seconds += TimedUpdate(filter);
   ThrowIfFailed(context);
-  vtkUnstructuredGrid* output = vtkUnstructuredGrid::SafeDownCast(filter->GetOutputDataObject(0));
+  vtkPointSet* output = vtkPointSet::SafeDownCast(filter->GetOutputDataObject(0));
   if (!output)
   {
     throw Failure(context + ": the filter produced no output");
   }
-  vtkSmartPointer<vtkUnstructuredGrid> copy = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  vtkSmartPointer<vtkPointSet> copy = vtkSmartPointer<vtkPointSet>::Take(output->NewInstance());
   copy->ShallowCopy(output);
   filter->SetInputDataObject(0, nullptr);
   report.Cells = static_cast<long long>(copy->GetNumberOfCells());
   report.Points = static_cast<long long>(copy->GetNumberOfPoints());
+  report.PeakRssMiB = PeakRssMiB();
+  return copy;
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> RunStage(vtkAlgorithm* filter, vtkDataObject* input,
+  const std::string& context, StageReport& report, bool isSpacetree)
+{
+  vtkSmartPointer<vtkUnstructuredGrid> copy =
+    vtkUnstructuredGrid::SafeDownCast(RunFilter(filter, input, context, report));
+  if (!copy)
+  {
+    throw Failure(context + ": the filter produced no unstructured grid");
+  }
   std::ostringstream description;
   if (isSpacetree)
   {
@@ -1889,55 +2165,87 @@ long long FileSize(const std::string& path)
   return stat(path.c_str(), &info) == 0 ? static_cast<long long>(info.st_size) : -1;
 }
 
-void WriteMesh(vtkUnstructuredGrid* grid, const std::string& path, MeshFormat format,
+/// Writes a mesh with an XML writer (vtkXMLUnstructuredGridWriter or vtkXMLPolyDataWriter).
+template <class Writer>
+int WriteXML(vtkDataObject* mesh, const std::string& path, const std::string& compressor,
+  unsigned long& errorCode)
+{
+  vtkNew<Writer> writer;
+  Watch(writer);
+  writer->SetInputData(mesh);
+  writer->SetFileName(path.c_str());
+  // Inline binary, never appended: Debian 12's libexpat fails on appended-mode files.
+  writer->SetDataModeToBinary();
+  // The writer compresses and base64-encodes on one thread, so the compressor sets the write
+  // time: LZ4 is the fastest; zlib at level 1 (about twice as fast as its default level 5,
+  // files ~2% larger) makes files about 2.3 times smaller than LZ4.
+  if (compressor == "zlib")
+  {
+    writer->SetCompressorTypeToZLib();
+    writer->SetCompressionLevel(1);
+  }
+  else if (compressor == "lz4")
+  {
+    writer->SetCompressorTypeToLZ4();
+  }
+  else
+  {
+    writer->SetCompressorTypeToNone();
+  }
+  // Each compressed block pays for a new compressor stream: 1 MiB blocks instead of the
+  // default 32 KiB make the AAL mesh's write about a third faster for the same file size.
+  writer->SetBlockSize(1 << 20);
+  // 64-bit headers lift the 4 GiB limit on one array.
+  writer->SetHeaderTypeToUInt64();
+  const int written = writer->Write();
+  errorCode = writer->GetErrorCode();
+  return written;
+}
+
+/// Writes a mesh with a legacy writer (vtkUnstructuredGridWriter or vtkPolyDataWriter).
+template <class Writer>
+int WriteLegacy(vtkDataObject* mesh, const std::string& path, unsigned long& errorCode)
+{
+  vtkNew<Writer> writer;
+  Watch(writer);
+  writer->SetInputData(mesh);
+  writer->SetFileName(path.c_str());
+  writer->SetFileTypeToBinary();
+  const int written = writer->Write();
+  errorCode = writer->GetErrorCode();
+  return written;
+}
+
+/// Writes the mesh (a vtkUnstructuredGrid, or the cut's surface as a vtkPolyData).
+void WriteMesh(vtkPointSet* mesh, const std::string& path, MeshFormat format,
   const std::string& compressor, StageReport& report)
 {
   const std::string context = "writing '" + path + "'";
+  const bool surface = vtkPolyData::SafeDownCast(mesh) != nullptr;
+  if (surface != (format == MeshFormat::XMLPolyData) && format != MeshFormat::LegacyVTK)
+  {
+    // The command line was checked already.
+    throw Failure(context + ": the extension does not fit the " +
+      (surface ? "surface (polydata)" : "unstructured grid"));
+  }
   TemporaryFile temporary(path);
   const Clock::time_point start = Clock::now();
   int written = 0;
   unsigned long errorCode = 0;
-  if (format == MeshFormat::XMLUnstructuredGrid)
+  switch (format)
   {
-    vtkNew<vtkXMLUnstructuredGridWriter> writer;
-    Watch(writer);
-    writer->SetInputData(grid);
-    writer->SetFileName(temporary.GetPath().c_str());
-    // Inline binary, never appended: Debian 12's libexpat fails on appended-mode files.
-    writer->SetDataModeToBinary();
-    // The writer compresses and base64-encodes on one thread, so the compressor sets the write
-    // time: LZ4 is the fastest; zlib at level 1 (about twice as fast as its default level 5,
-    // files ~2% larger) makes files about 2.3 times smaller than LZ4.
-    if (compressor == "zlib")
-    {
-      writer->SetCompressorTypeToZLib();
-      writer->SetCompressionLevel(1);
-    }
-    else if (compressor == "lz4")
-    {
-      writer->SetCompressorTypeToLZ4();
-    }
-    else
-    {
-      writer->SetCompressorTypeToNone();
-    }
-    // Each compressed block pays for a new compressor stream: 1 MiB blocks instead of the
-    // default 32 KiB make the AAL mesh's write about a third faster for the same file size.
-    writer->SetBlockSize(1 << 20);
-    // 64-bit headers lift the 4 GiB limit on one array.
-    writer->SetHeaderTypeToUInt64();
-    written = writer->Write();
-    errorCode = writer->GetErrorCode();
-  }
-  else
-  {
-    vtkNew<vtkUnstructuredGridWriter> writer;
-    Watch(writer);
-    writer->SetInputData(grid);
-    writer->SetFileName(temporary.GetPath().c_str());
-    writer->SetFileTypeToBinary();
-    written = writer->Write();
-    errorCode = writer->GetErrorCode();
+    case MeshFormat::XMLUnstructuredGrid:
+      written =
+        WriteXML<vtkXMLUnstructuredGridWriter>(mesh, temporary.GetPath(), compressor, errorCode);
+      break;
+    case MeshFormat::XMLPolyData:
+      written = WriteXML<vtkXMLPolyDataWriter>(mesh, temporary.GetPath(), compressor, errorCode);
+      break;
+    case MeshFormat::LegacyVTK:
+      written = surface
+        ? WriteLegacy<vtkPolyDataWriter>(mesh, temporary.GetPath(), errorCode)
+        : WriteLegacy<vtkUnstructuredGridWriter>(mesh, temporary.GetPath(), errorCode);
+      break;
   }
   ThrowIfFailed(context);
   if (!written || errorCode != 0)
@@ -1962,10 +2270,12 @@ void WriteMesh(vtkUnstructuredGrid* grid, const std::string& path, MeshFormat fo
 //------------------------------------------------------------------------------------------------
 // Material counts: cells per value of the "Material" cell array.
 
-std::map<long long, long long> CountCellsPerMaterial(vtkUnstructuredGrid* grid)
+/// The cells per value of the cell array "Material" (of the surface: "OriginalMaterial").
+std::map<long long, long long> CountCellsPerMaterial(vtkPointSet* mesh)
 {
   std::map<long long, long long> counts;
-  vtkDataArray* materials = grid->GetCellData()->GetArray("Material");
+  vtkDataArray* materials = mesh->GetCellData()->GetArray(
+    vtkPolyData::SafeDownCast(mesh) ? "OriginalMaterial" : "Material");
   if (!materials)
   {
     return counts;
@@ -1979,17 +2289,22 @@ std::map<long long, long long> CountCellsPerMaterial(vtkUnstructuredGrid* grid)
 }
 
 /// The JSON key of the per-material counts names what is counted.
-std::string MaterialCountKey(vtkUnstructuredGrid* grid, const Options& options)
+std::string MaterialCountKey(vtkPointSet* mesh, const Options& options, bool twoDimensional)
 {
-  if (options.StopAfter != StopStage::Tessellate)
+  if (options.StopAfter == StopStage::Spacetree || options.StopAfter == StopStage::Balance)
   {
     return "leaves_per_material";
+  }
+  if (options.WritesSurface())
+  {
+    // The facets of the surface per label of the cell they bound on the inside.
+    return twoDimensional ? "lines_per_original_material" : "triangles_per_original_material";
   }
   if (options.Elements != stmSpacetreeTessellate::SIMPLICIAL)
   {
     return "cells_per_material"; // hybrid: several cell types; leaves: not the spacetree's
   }
-  if (grid->GetNumberOfCells() > 0 && grid->GetCellType(0) == VTK_TRIANGLE)
+  if (twoDimensional || (mesh->GetNumberOfCells() > 0 && mesh->GetCellType(0) == VTK_TRIANGLE))
   {
     return "triangles_per_material"; // a 2D image
   }
@@ -2215,6 +2530,32 @@ void PrintTable(const std::vector<StageReport>& stages, double totalSeconds)
                 << " fraction " << std::fixed << std::setprecision(4)
                 << stage.HexahedronVolumeFraction << std::defaultfloat;
     }
+    if (stage.ShowBoundaryLayers)
+    {
+      std::cout << "; " << stage.BoundaryLayers << " boundary layer"
+                << (stage.BoundaryLayers == 1 ? "" : "s");
+    }
+    std::cout << '\n';
+  }
+  // The cut's figures: split cells, cut points and the cells on each side.
+  for (const StageReport& stage : stages)
+  {
+    if (!stage.Cut || stage.Skipped)
+    {
+      continue;
+    }
+    std::cout << stage.Name << ": " << stage.SplitCells << " split cells, " << stage.CutPoints
+              << " cut points";
+    if (stage.InsideCells >= 0)
+    {
+      std::cout << "; " << stage.InsideCells << " inside cells, " << stage.OutsideCells
+                << " outside cells";
+    }
+    else
+    {
+      std::cout << "; a surface of " << stage.Cells << ' '
+                << (stage.TwoDimensional ? "lines" : "triangles");
+    }
     std::cout << '\n';
   }
   std::cout.flush();
@@ -2363,7 +2704,11 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
        << ", \"sizing_array\": "
        << (options.SizingArray.empty() ? "null" : JsonString(options.SizingArray))
        << ", \"balance_labels\": " << JsonLabelMap(options.LabelBalanceLevels)
-       << ", \"balance_region\": " << JsonRegion(options.BalanceRegion, true) << "},\n";
+       << ", \"balance_region\": " << JsonRegion(options.BalanceRegion, true)
+       << ", \"separating\": " << JsonString(options.Separating.Text)
+       << ", \"output_mode\": " << JsonString(KeywordName(options.OutputMode, OutputModes))
+       << ", \"keep\": " << JsonString(KeywordName(options.KeepSide, KeptSides))
+       << ", \"iso\": " << JsonNumber(options.IsoValue) << "},\n";
   json << "  \"threads\": " << summary.Threads.Threads << ",\n";
   json << "  \"smp_backend\": " << JsonString(summary.Threads.Backend) << ",\n";
   // The spacetree's levels: cell edges in voxels per level, root first, along the image axes the
@@ -2418,6 +2763,17 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
       {
         json << ", \"hexahedron_volume_fraction\": " << JsonNumber(stage.HexahedronVolumeFraction);
       }
+      json << ", \"boundary_layers\": " << stage.BoundaryLayers;
+    }
+    if (stage.Cut)
+    {
+      json << ", \"split_cells\": " << JsonCount(stage.SplitCells)
+           << ", \"cut_points\": " << JsonCount(stage.CutPoints);
+      if (stage.InsideCells >= 0)
+      {
+        json << ", \"inside_cells\": " << stage.InsideCells
+             << ", \"outside_cells\": " << stage.OutsideCells;
+      }
     }
     json << "}" << (i + 1 < summary.Stages.size() ? "," : "") << "\n";
   }
@@ -2449,16 +2805,147 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
 
 //------------------------------------------------------------------------------------------------
 
-/// The default output: the input's base name without its image extension, plus ".vtu", in the
-/// current directory.
-std::string DefaultOutputName(const std::string& input)
+/// The default output: the input's base name without its image extension, plus ".vtu" (".vtp"
+/// for the cut's surface), in the current directory.
+std::string DefaultOutputName(const std::string& input, bool surface)
 {
   std::string name = FileName(input);
   if (const ImageFormatInfo* format = FindImageFormat(input))
   {
     name.resize(name.size() - std::strlen(format->Extension));
   }
-  return name + ".vtu";
+  return name + (surface ? ".vtp" : ".vtu");
+}
+
+/// --output-mode, --keep and --iso only act on the cut stage, and --keep only on volume output:
+/// say so when they are given but have no effect.
+void WarnAboutIgnoredCutOptions(const Options& options)
+{
+  // The labels' functions go into the tessellation; the gray image and the sphere only into
+  // the cut.
+  const SeparatingKind kind = options.Separating.Kind;
+  if (options.SeparatingGiven && kind != SeparatingKind::None &&
+    (options.StopAfter == StopStage::Spacetree || options.StopAfter == StopStage::Balance ||
+      (options.StopAfter == StopStage::Tessellate &&
+        (kind == SeparatingKind::Gray || kind == SeparatingKind::Sphere))))
+  {
+    Diagnostics() << "stmesh: warning: --separating " << options.Separating.Text
+                  << " is ignored with --stop-after " << StopStageName(options.StopAfter)
+                  << (options.StopAfter == StopStage::Tessellate
+                         ? " (the tessellation carries the labels' function)"
+                         : "")
+                  << '\n';
+  }
+  for (const std::string& name : options.CutOnlyOptions)
+  {
+    if (!options.Cuts())
+    {
+      Diagnostics() << "stmesh: warning: " << name << " applies to the cut stage only; ignored "
+                    << (options.Separating.Kind == SeparatingKind::None
+                           ? std::string("with --separating none")
+                           : "with --stop-after " + std::string(StopStageName(options.StopAfter)))
+                    << '\n';
+    }
+    else if (name == "--keep" && options.WritesSurface())
+    {
+      Diagnostics() << "stmesh: warning: --keep applies to volume output only; ignored with "
+                       "--output-mode surface\n";
+    }
+  }
+}
+
+/// The "Material" of the cut's inside cells: the body label if --labels gives exactly one, else 1.
+int InsideMaterial(const Options& options)
+{
+  return options.Labels.size() == 1 ? options.Labels[0] : 1;
+}
+
+/// The cut stage: the separating function of stmSeparatingFunction if --separating asks for one
+/// (the gray image is read here), then stmMarchingSimplices.
+vtkSmartPointer<vtkPointSet> RunCut(
+  vtkSmartPointer<vtkUnstructuredGrid> grid, const Options& options, StageReport& report)
+{
+  const SeparatingOption& separating = options.Separating;
+  if (separating.Kind == SeparatingKind::Gray || separating.Kind == SeparatingKind::Sphere)
+  {
+    vtkNew<stmSeparatingFunction> function;
+    vtkNew<vtkSphere> sphere;
+    vtkSmartPointer<vtkImageData> gray;
+    if (separating.Kind == SeparatingKind::Sphere)
+    {
+      sphere->SetCenter(separating.Sphere[0], separating.Sphere[1], separating.Sphere[2]);
+      sphere->SetRadius(separating.Sphere[3]);
+      function->SetMode(stmSeparatingFunction::IMPLICIT_FUNCTION);
+      function->SetImplicitFunction(sphere);
+    }
+    else
+    {
+      ImageInfo grayInfo;
+      StageReport grayReport;
+      gray = ReadImage(separating.GrayImage, grayInfo, grayReport, false);
+      report.Seconds += grayReport.Seconds;
+      function->SetMode(stmSeparatingFunction::GRAY_IMAGE);
+      function->SetThreshold(separating.GrayIso);
+      function->SetInsideAboveThreshold(true);
+      function->SetInputDataObject(1, gray);
+    }
+    vtkSmartPointer<vtkUnstructuredGrid> withFunction = vtkUnstructuredGrid::SafeDownCast(
+      RunFilter(function, grid, "computing the separating function", report));
+    if (!withFunction)
+    {
+      throw Failure("computing the separating function: the filter produced no mesh");
+    }
+    function->SetInputDataObject(1, nullptr);
+    grid = withFunction;
+  }
+
+  vtkNew<stmMarchingSimplices> cut;
+  cut->SetOutputMode(options.OutputMode);
+  cut->SetKeepSide(options.KeepSide);
+  cut->SetIsoValue(options.IsoValue);
+  cut->SetInsideMaterial(InsideMaterial(options));
+  cut->SetOutsideMaterial(0); // the background label
+  vtkSmartPointer<vtkPointSet> mesh = RunFilter(cut, grid, "cutting the mesh", report);
+  grid = nullptr;
+  report.Cut = true;
+  report.SplitCells = static_cast<long long>(cut->GetNumberOfSplitCells());
+  report.CutPoints = static_cast<long long>(cut->GetNumberOfCutPoints());
+  if (!options.WritesSurface())
+  {
+    report.InsideCells = 0;
+    report.OutsideCells = 0;
+    if (vtkDataArray* materials = mesh->GetCellData()->GetArray("Material"))
+    {
+      const double inside = InsideMaterial(options);
+      for (vtkIdType cell = 0; cell < materials->GetNumberOfTuples(); ++cell)
+      {
+        ++(materials->GetTuple1(cell) == inside ? report.InsideCells : report.OutsideCells);
+      }
+    }
+  }
+  std::ostringstream description;
+  description << report.Cells << " cells, " << report.Points << " points";
+  report.Description = description.str();
+  // An empty side usually means a sphere or an iso-value that misses the body.
+  std::string emptiness;
+  if (options.WritesSurface() && report.Cells == 0)
+  {
+    emptiness = "does not cross the mesh: the surface is empty";
+  }
+  else if (report.InsideCells == 0 && options.KeepSide != stmMarchingSimplices::OUTSIDE)
+  {
+    emptiness = "encloses no part of the mesh: the cut has no inside cells";
+  }
+  else if (report.OutsideCells == 0 && options.KeepSide != stmMarchingSimplices::INSIDE)
+  {
+    emptiness = "encloses the whole mesh: the cut has no outside cells";
+  }
+  if (!emptiness.empty())
+  {
+    Diagnostics() << "stmesh: warning: the separating surface (--separating " << separating.Text
+                  << (options.IsoValue != 0 ? ", --iso" : "") << ") " << emptiness << '\n';
+  }
+  return mesh;
 }
 
 int Run(const Options& options)
@@ -2476,7 +2963,8 @@ int Run(const Options& options)
         " does not exist; install the Debian package mricron-data or give an INPUT");
     }
   }
-  const std::string output = options.Output.empty() ? DefaultOutputName(input) : options.Output;
+  const std::string output =
+    options.Output.empty() ? DefaultOutputName(input, options.WritesSurface()) : options.Output;
   MeshFormat meshFormat;
   if (!FindMeshFormat(output, meshFormat))
   {
@@ -2489,6 +2977,10 @@ int Run(const Options& options)
       SupportedInputExtensions);
   }
   CheckReadableFile(input);
+  if (options.Cuts() && options.Separating.Kind == SeparatingKind::Gray)
+  {
+    CheckReadableFile(options.Separating.GrayImage, true);
+  }
   CheckWritableTarget(output, "output");
   if (!options.SummaryPath.empty())
   {
@@ -2501,6 +2993,7 @@ int Run(const Options& options)
     throw Failure("the summary and the output are the same file '" + output + "'");
   }
   summary.Threads = SetUpThreads(options.Threads);
+  WarnAboutIgnoredCutOptions(options);
 
   std::cout << "input:   " << input << '\n';
   std::cout << "output:  " << output << '\n';
@@ -2552,7 +3045,8 @@ int Run(const Options& options)
     summary.Stages.push_back(balanceReport);
   }
 
-  if (options.StopAfter == StopStage::Tessellate)
+  bool twoDimensional = false;
+  if (options.StopAfter == StopStage::Tessellate || options.StopAfter == StopStage::Cut)
   {
     StageReport tessellateReport;
     tessellateReport.Name = "tessellate";
@@ -2561,6 +3055,21 @@ int Run(const Options& options)
     tessellate->SetTemplateRule(options.TemplateRule);
     tessellate->SetCellTemplate(options.CellTemplate);
     tessellate->SetBoundaryLayers(options.BoundaryLayers);
+    // The labels' function also for the gray image and the sphere: it brings the background
+    // layers around the body in which their surfaces usually lie.
+    switch (options.Separating.Kind)
+    {
+      case SeparatingKind::None:
+        tessellate->SetSeparatingFunction(stmSpacetreeTessellate::NO_FUNCTION);
+        break;
+      case SeparatingKind::Smooth:
+        tessellate->SetSeparatingFunction(stmSpacetreeTessellate::SMOOTHED_LABELS);
+        tessellate->SetSmoothingSigma(options.Separating.Sigma);
+        break;
+      default:
+        tessellate->SetSeparatingFunction(stmSpacetreeTessellate::LABELS);
+        break;
+    }
     if (options.Elements != stmSpacetreeTessellate::SIMPLICIAL)
     {
       for (const std::string& name : options.SimplicialOnlyOptions)
@@ -2583,17 +3092,33 @@ int Run(const Options& options)
     {
       tessellateReport.HexahedronVolumeFraction = HexahedronVolumeFraction(grid);
     }
+    tessellateReport.BoundaryLayers = tessellate->GetNumberOfBoundaryLayers();
+    tessellateReport.ShowBoundaryLayers = options.Separating.Kind != SeparatingKind::None;
+    twoDimensional = tessellateReport.TwoDimensional;
     summary.Stages.push_back(tessellateReport);
+  }
+
+  vtkSmartPointer<vtkPointSet> mesh = grid;
+  grid = nullptr;
+  if (options.Cuts())
+  {
+    StageReport cutReport;
+    cutReport.Name = "cut";
+    cutReport.TwoDimensional = twoDimensional;
+    vtkSmartPointer<vtkUnstructuredGrid> tessellation = vtkUnstructuredGrid::SafeDownCast(mesh);
+    mesh = nullptr; // RunCut frees the tessellation once it is cut
+    mesh = RunCut(std::move(tessellation), options, cutReport);
+    summary.Stages.push_back(cutReport);
   }
 
   StageReport writeReport;
   writeReport.Name = "write";
-  WriteMesh(grid, output, meshFormat, options.Compressor, writeReport);
+  WriteMesh(mesh, output, meshFormat, options.Compressor, writeReport);
   summary.Stages.push_back(writeReport);
   summary.TotalSeconds = SecondsSince(start);
 
-  summary.MaterialKey = MaterialCountKey(grid, options);
-  summary.CellsPerMaterial = CountCellsPerMaterial(grid);
+  summary.MaterialKey = MaterialCountKey(mesh, options, twoDimensional);
+  summary.CellsPerMaterial = CountCellsPerMaterial(mesh);
 
   PrintTable(summary.Stages, summary.TotalSeconds);
   if (!options.SummaryPath.empty())

@@ -5,6 +5,8 @@
 #include "Balance/SpacetreeBalance.h"
 #include "Balance/SpacetreeGrading.h"
 #include "Check/MeshInvariants.h"
+#include "Cut/MarchingSimplices.h"
+#include "Cut/SeparatingFunction.h"
 #include "Spacetree/SpacetreeBuild.h"
 #include "Tessellate/SpacetreeTessellation.h"
 
@@ -38,6 +40,16 @@ void InstantiatePipeline()
   tessellator.Prepare(tree, SpacetreeTessellationOptions(), executor);
   tessellator.WriteSimplices(static_cast<std::int64_t*>(nullptr), nullptr, executor);
   CheckSimplicialMesh<Dim>({}, {}, nullptr);
+  std::vector<std::int8_t> indicator;
+  BodyIndicator<Dim>(tree, indicator, executor);
+  MarchingSimplices<Dim> cutter;
+  auto outside = [](std::int64_t) { return CutSide::Outside; };
+  cutter.Classify(static_cast<const double*>(nullptr), 0, static_cast<const std::int64_t*>(nullptr),
+    0, MarchingSimplicesOptions(), outside, executor);
+  cutter.WriteCells(static_cast<const std::int64_t*>(nullptr), static_cast<std::int32_t*>(nullptr),
+    nullptr, nullptr, executor);
+  std::vector<std::int64_t> facets, parents;
+  cutter.ExtractSurface(static_cast<const std::int64_t*>(nullptr), facets, parents, executor);
 }
 } // namespace
 

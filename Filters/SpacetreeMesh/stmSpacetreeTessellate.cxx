@@ -4,12 +4,16 @@
 #include "stmSMPExecutor.h"
 #include "stmSpacetreeData.h"
 
+#include "Cut/SeparatingFunction.h"
 #include "Tessellate/SpacetreeTessellation.h"
 
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkCellType.h"
 #include "vtkDoubleArray.h"
+#include "vtkFloatArray.h"
+#include "vtkImageData.h"
+#include "vtkImageGaussianSmooth.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
 #include "vtkIntArray.h"
@@ -23,6 +27,8 @@
 #include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 
+#include <cmath>
+#include <functional>
 #include <limits>
 
 vtkStandardNewMacro(stmSpacetreeTessellate);
@@ -152,15 +158,155 @@ vtkSmartPointer<vtkCellArray> WriteCells(stm::SpacetreeTessellator<Dim>& tessell
   return cellArray;
 }
 
+/// Physical edge of a voxel along each spacetree axis.
+template <int Dim>
+std::array<double, Dim> VoxelEdges(
+  const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry)
+{
+  std::array<double, Dim> edges{};
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    const double* vector = geometry.AxisVectors[geometry.ImageAxes[axis]];
+    edges[axis] = static_cast<double>(tree.VoxelSubdivision[axis]) *
+      std::sqrt(vector[0] * vector[0] + vector[1] * vector[1] + vector[2] * vector[2]);
+  }
+  return edges;
+}
+
+/// The voxel-centred values of the separating function and their sampler: the body indicator,
+/// smoothed by a Gaussian of sigma (physical units) when sigma > 0. The smoothed image is padded
+/// with outside voxels far enough for the kernel (3 sigma), so the image border is no wall.
+template <int Dim>
+struct VoxelFunction
+{
+  std::vector<std::int8_t> Indicator;
+  vtkSmartPointer<vtkFloatArray> Smoothed;
+  stm::LatticeIndex<Dim> Padding{};
+  std::function<double(const double*)> Sample;
+
+  template <class Executor>
+  stm::Status Build(const stm::Spacetree<Dim>& tree, const std::array<double, Dim>& voxelEdges,
+    double sigma, Executor& executor)
+  {
+    stm::Status status = stm::BodyIndicator<Dim>(tree, this->Indicator, executor);
+    if (!status.IsOk())
+    {
+      return status;
+    }
+    if (sigma <= 0)
+    {
+      stm::VoxelField<Dim, std::int8_t> field{ tree.ImageDimensions, this->Indicator.data(), 1.0 };
+      this->Sample = [field](const double* position) { return field.Sample(position); };
+      return stm::Status::Ok();
+    }
+    int dims[3] = { 1, 1, 1 };
+    double deviations[3] = { 0, 0, 0 };
+    stm::LatticeIndex<Dim> padded;
+    std::int64_t total = 1;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      deviations[axis] = sigma / voxelEdges[axis];
+      this->Padding[axis] = static_cast<std::int64_t>(std::ceil(3.0 * deviations[axis])) + 1;
+      padded[axis] = tree.ImageDimensions[axis] + 2 * this->Padding[axis];
+      dims[axis] = static_cast<int>(padded[axis]);
+      total *= padded[axis];
+    }
+    if (total > (std::int64_t{ 1 } << 31))
+    {
+      return stm::Status::OutOfRange("the smoothed indicator would need " + std::to_string(total) +
+        " voxels; use a smaller SmoothingSigma");
+    }
+    vtkNew<vtkImageData> image;
+    image->SetDimensions(dims);
+    vtkNew<vtkFloatArray> values;
+    values->SetNumberOfValues(total);
+    values->FillValue(1.0f);
+    stm::ForEachLatticePoint<Dim>(stm::LatticeIndex<Dim>{}, tree.ImageDimensions,
+      [&](const stm::LatticeIndex<Dim>& voxel)
+      {
+        std::int64_t source = 0, target = 0;
+        for (int axis = Dim - 1; axis >= 0; --axis)
+        {
+          source = source * tree.ImageDimensions[axis] + voxel[axis];
+          target = target * padded[axis] + voxel[axis] + this->Padding[axis];
+        }
+        values->SetValue(target, static_cast<float>(this->Indicator[source]));
+      });
+    image->GetPointData()->SetScalars(values);
+    vtkNew<vtkImageGaussianSmooth> smooth;
+    smooth->SetDimensionality(Dim);
+    smooth->SetStandardDeviations(deviations);
+    smooth->SetRadiusFactors(3.0, 3.0, 3.0);
+    smooth->SetInputData(image);
+    smooth->Update();
+    this->Smoothed = vtkFloatArray::SafeDownCast(smooth->GetOutput()->GetPointData()->GetScalars());
+    if (!this->Smoothed)
+    {
+      return stm::Status::Invalid("the Gaussian smoothing of the indicator failed");
+    }
+    std::vector<std::int8_t>().swap(this->Indicator);
+    stm::VoxelField<Dim, float> field{ padded, this->Smoothed->GetPointer(0), 1.0 };
+    const stm::LatticeIndex<Dim> padding = this->Padding;
+    this->Sample = [field, padding](const double* position)
+    {
+      double shifted[Dim];
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        shifted[axis] = position[axis] + static_cast<double>(padding[axis]);
+      }
+      return field.Sample(shifted);
+    };
+    return stm::Status::Ok();
+  }
+};
+
+/// Background layers that keep the separating function's zero set inside the mesh.
+template <int Dim>
+int RequiredBoundaryLayers(int function, double sigma, const std::array<double, Dim>& voxelEdges)
+{
+  if (function == stmSpacetreeTessellate::LABELS)
+  {
+    return 1;
+  }
+  if (function == stmSpacetreeTessellate::SMOOTHED_LABELS)
+  {
+    const double smallest = *std::min_element(voxelEdges.begin(), voxelEdges.end());
+    return static_cast<int>(std::min(100.0, 1.0 + std::ceil(3.0 * sigma / smallest)));
+  }
+  return 0;
+}
+
 template <int Dim>
 bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry,
-  const stm::SpacetreeTessellationOptions& options, stmSMPExecutor& executor,
-  vtkUnstructuredGrid* output, vtkIdType& insertedPoints, std::string& error)
+  stm::SpacetreeTessellationOptions options, int separatingFunction, double sigma,
+  stmSMPExecutor& executor, vtkUnstructuredGrid* output, vtkIdType& insertedPoints,
+  int& boundaryLayers, std::string& error)
 {
   stm::Spacetree<Dim> tree;
   if (!stmSpacetreeData::ReadSpacetree<Dim>(input, tree, error))
   {
     return false;
+  }
+  const std::array<double, Dim> voxelEdges = VoxelEdges<Dim>(tree, geometry);
+  if (!options.IncludeBackground)
+  {
+    options.BoundaryLayers = std::max(
+      options.BoundaryLayers, RequiredBoundaryLayers<Dim>(separatingFunction, sigma, voxelEdges));
+  }
+  boundaryLayers = options.IncludeBackground ? 0 : options.BoundaryLayers;
+  VoxelFunction<Dim> voxelFunction;
+  vtkSmartPointer<vtkDoubleArray> functionArray;
+  double* functionValues = nullptr;
+  if (separatingFunction != stmSpacetreeTessellate::NO_FUNCTION)
+  {
+    executor.SetProgressRange(0.0, 0.1);
+    const stm::Status built = voxelFunction.Build(tree, voxelEdges,
+      separatingFunction == stmSpacetreeTessellate::SMOOTHED_LABELS ? sigma : 0.0, executor);
+    if (!built.IsOk())
+    {
+      error = built.GetMessage();
+      return false;
+    }
   }
   stm::SpacetreeTessellator<Dim> tessellator;
   executor.SetProgressRange(0.1, 0.95);
@@ -179,6 +325,13 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   points->SetDataTypeToDouble();
   points->SetNumberOfPoints(numberOfPoints);
   double* xyz = vtkDoubleArray::SafeDownCast(points->GetData())->GetPointer(0);
+  if (voxelFunction.Sample)
+  {
+    functionArray = vtkSmartPointer<vtkDoubleArray>::New();
+    functionArray->SetName("SeparatingFunction");
+    functionArray->SetNumberOfValues(numberOfPoints);
+    functionValues = functionArray->GetPointer(0);
+  }
   vtkSmartPointer<vtkUnsignedCharArray> hangingNodes;
   unsigned char* hanging = nullptr;
   if (options.Output == stm::TessellationOutput::Leaves)
@@ -200,6 +353,15 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
       lattice[axis] = 0.5 * static_cast<double>(halfUnits[axis]);
     }
     geometry.ToPhysical(lattice, xyz + 3 * id);
+    if (functionValues)
+    {
+      double voxel[Dim];
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        voxel[axis] = lattice[axis] / static_cast<double>(tree.VoxelSubdivision[axis]);
+      }
+      functionValues[id] = voxelFunction.Sample(voxel);
+    }
   };
   status = tessellator.VisitPoints(place, executor);
   if (!status.IsOk())
@@ -275,6 +437,10 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   {
     output->GetPointData()->AddArray(hangingNodes);
   }
+  if (functionArray)
+  {
+    output->GetPointData()->SetScalars(functionArray);
+  }
   return true;
 }
 } // namespace
@@ -293,7 +459,11 @@ void stmSpacetreeTessellate::PrintSelf(ostream& os, vtkIndent indent)
      << "\n";
   os << indent << "IncludeBackground: " << (this->IncludeBackground ? "On" : "Off") << "\n";
   os << indent << "BoundaryLayers: " << this->BoundaryLayers << "\n";
+  static const char* const functions[] = { "NoFunction", "Labels", "SmoothedLabels" };
+  os << indent << "SeparatingFunction: " << functions[this->SeparatingFunction] << "\n";
+  os << indent << "SmoothingSigma: " << this->SmoothingSigma << "\n";
   os << indent << "NumberOfInsertedPoints: " << this->NumberOfInsertedPoints << "\n";
+  os << indent << "NumberOfBoundaryLayers: " << this->NumberOfBoundaryLayers << "\n";
 }
 
 int stmSpacetreeTessellate::RequestData(
@@ -317,10 +487,12 @@ int stmSpacetreeTessellate::RequestData(
   options.BoundaryLayers = this->BoundaryLayers;
   stmSMPExecutor executor(this);
   this->NumberOfInsertedPoints = 0;
+  this->NumberOfBoundaryLayers = 0;
   const bool done = geometry.Dimension == 3
-    ? Tessellate<3>(input, geometry, options, executor, output, this->NumberOfInsertedPoints, error)
-    : Tessellate<2>(
-        input, geometry, options, executor, output, this->NumberOfInsertedPoints, error);
+    ? Tessellate<3>(input, geometry, options, this->SeparatingFunction, this->SmoothingSigma,
+        executor, output, this->NumberOfInsertedPoints, this->NumberOfBoundaryLayers, error)
+    : Tessellate<2>(input, geometry, options, this->SeparatingFunction, this->SmoothingSigma,
+        executor, output, this->NumberOfInsertedPoints, this->NumberOfBoundaryLayers, error);
   if (done)
   {
     // The executive passes the input's field data on; the spacetree's do not describe a mesh.

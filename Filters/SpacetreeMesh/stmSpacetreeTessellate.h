@@ -25,7 +25,9 @@
  * background leaves), so each material's volume equals its voxel volume.
  *
  * Output: a vtkUnstructuredGrid of VTK_TETRA, VTK_PYRAMID and VTK_HEXAHEDRON (VTK_TRIANGLE and
- * VTK_QUAD in 2D), positively oriented, with the cell array "Material" (the label of the leaf).
+ * VTK_QUAD in 2D), positively oriented, with the cell array "Material" (the label of the leaf)
+ * and, unless SeparatingFunction is NO_FUNCTION, the point array "SeparatingFunction" that
+ * stmMarchingSimplices cuts at 0 by default (negative inside the body).
  * Points are numbered in lattice order, so the output does not depend on the number of
  * threads.
  *
@@ -111,6 +113,45 @@ public:
   vtkGetMacro(BoundaryLayers, int);
   ///@}
 
+  enum SeparatingFunctions
+  {
+    /// No point array; the boundary stays the voxel staircase.
+    NO_FUNCTION = 0,
+    /// The d-linear interpolation of the body indicator (-1 inside, +1 outside) on the dual grid
+    /// of the voxel centres (paper section 3.1).
+    LABELS = 1,
+    /// The same indicator smoothed by a Gaussian of SmoothingSigma (mm) first.
+    SMOOTHED_LABELS = 2
+  };
+
+  ///@{
+  /**
+   * The point array "SeparatingFunction" to compute for stmMarchingSimplices: NO_FUNCTION,
+   * LABELS (the default) or SMOOTHED_LABELS. Its zero set lies within half a voxel of the body's
+   * voxels (LABELS) or within a few SmoothingSigma (SMOOTHED_LABELS), so unless
+   * IncludeBackground is on, the output gets at least the background layers that keep that zero
+   * set inside the mesh (1 for LABELS; 1 + 3 sigma / the smallest voxel edge for
+   * SMOOTHED_LABELS, at most 100) even when BoundaryLayers asks for fewer.
+   */
+  vtkSetClampMacro(SeparatingFunction, int, NO_FUNCTION, SMOOTHED_LABELS);
+  vtkGetMacro(SeparatingFunction, int);
+  ///@}
+
+  ///@{
+  /**
+   * The standard deviation of the Gaussian of SMOOTHED_LABELS, in physical units (mm),
+   * 0.01 to 1000. Default 1.
+   */
+  vtkSetClampMacro(SmoothingSigma, double, 0.01, 1000.0);
+  vtkGetMacro(SmoothingSigma, double);
+  ///@}
+
+  /**
+   * The background layers the last update output (BoundaryLayers, or more for the separating
+   * function).
+   */
+  vtkGetMacro(NumberOfBoundaryLayers, int);
+
   /**
    * Points the last update added to the leaf corners (face and cell centres), for reports.
    */
@@ -138,7 +179,10 @@ protected:
   int CellTemplate = CHECKERBOARD;
   bool IncludeBackground = false;
   int BoundaryLayers = 0;
+  int SeparatingFunction = LABELS;
+  double SmoothingSigma = 1.0;
   vtkIdType NumberOfInsertedPoints = 0;
+  int NumberOfBoundaryLayers = 0;
 
 private:
   stmSpacetreeTessellate(const stmSpacetreeTessellate&) = delete;

@@ -360,6 +360,7 @@ for algorithm, name in ((spacetreemesh.stmSpacetreeBalance(), "SpacetreeBalance"
 # Out-of-range parameters of SpacetreeTessellate are clamped (vtkSetClampMacro), not errors; the
 # clamped values are used.
 clamped = spacetreemesh.stmSpacetreeTessellate()
+clamped.SetSeparatingFunction(clamped.NO_FUNCTION)  # no automatic boundary layer
 for setter, value, getter, expected in [
         ("SetBoundaryLayers", -5, "GetBoundaryLayers", 0),
         ("SetBoundaryLayers", 101, "GetBoundaryLayers", 100),

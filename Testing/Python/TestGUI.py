@@ -1,5 +1,5 @@
 """The plugin in the real ParaView GUI (run under Xvfb by RunGUITest.sh): the NIfTI reader and the
-three filters run through the GUI's Python, the mesh is right, and a screenshot shows it.
+four filters run through the GUI's Python, the mesh is right, and a screenshot shows it.
 
 ParaView's --script exits 0 even when the script raises, so success is reported by writing the
 marker file named by STM_GUI_MARKER, which the wrapper checks.
@@ -15,14 +15,22 @@ image = OpenDataFile(os.environ["STM_AAL"])
 assert image.GetXMLName() == "stmNIFTIReader", image.GetXMLName()
 tree = ImageToSpacetree(Input=image)  # noqa: F821 (defined by LoadPlugin)
 balanced = SpacetreeBalance(Input=tree)  # noqa: F821
-mesh = SpacetreeTessellate(Input=balanced)  # noqa: F821
+tessellated = SpacetreeTessellate(Input=balanced)  # noqa: F821
+tessellated.UpdatePipeline()
+cells = tessellated.GetDataInformation().GetNumberOfCells()
+# AAL, MaxCellSize 16, BalanceLevel 1, checkerboard template, one automatic background layer for
+# the default separating function.
+assert cells == 6217419, cells
+cut = MarchingSimplices(Input=tessellated)  # noqa: F821
+cut.UpdatePipeline()
+cells = cut.GetDataInformation().GetNumberOfCells()
+assert cells == 7911505, cells
+mesh = MarchingSimplices(Input=tessellated, KeepSide="Inside")  # noqa: F821
 mesh.UpdatePipeline()
-cells = mesh.GetDataInformation().GetNumberOfCells()
-assert cells == 4650454, cells  # AAL, MaxCellSize 16, BalanceLevel 1, checkerboard template
 
 view = GetActiveViewOrCreate("RenderView")
 display = Show(mesh, view)
-ColorBy(display, ("CELLS", "Material"))
+ColorBy(display, ("CELLS", "OriginalMaterial"))
 display.RescaleTransferFunctionToDataRange(True)
 view.CameraPosition = [90, -400, 300]
 view.CameraFocalPoint = [90, 108, 90]

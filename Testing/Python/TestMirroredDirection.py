@@ -24,6 +24,7 @@ for name, direction in (("identity", None),
     tree = spacetreemesh.stmImageToSpacetree()
     tree.SetInputData(image)
     mesher = spacetreemesh.stmSpacetreeTessellate()
+    mesher.SetSeparatingFunction(mesher.NO_FUNCTION)  # the staircase mesh
     mesher.SetInputConnection(tree.GetOutputPort())
     mesher.Update()
     try:

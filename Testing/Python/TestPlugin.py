@@ -74,7 +74,7 @@ tree = ImageToSpacetree(Input=reader)
 T.check_equal(list(tree.LabelArray), ["POINTS", image.GetPointData().GetScalars().GetName()],
               "default LabelArray")
 balance = SpacetreeBalance(Input=tree)
-mesh = SpacetreeTessellate(Input=balance)
+mesh = SpacetreeTessellate(Input=balance, SeparatingFunction="No Function")
 mesh.UpdatePipeline()
 
 tree_data = vtk_output(tree)
@@ -165,7 +165,7 @@ else:
         T.check(bool(np.array_equal(T.cell_array(saved_tree_data, name),
                                     T.cell_array(balanced_data, name))),
                 "spacetree cell array %s read back differs" % name)
-    mesh_of_saved = SpacetreeTessellate(Input=saved_tree)
+    mesh_of_saved = SpacetreeTessellate(Input=saved_tree, SeparatingFunction="No Function")
     mesh_of_saved_data = vtk_output(mesh_of_saved)
     T.check_equal(mesh_of_saved_data.GetNumberOfCells(), cells,
                   "cells of the saved spacetree's mesh")
@@ -197,7 +197,8 @@ producer.GetClientSideObject().SetOutput(image2d)
 producer.UpdatePipeline()
 T.check_equal(tuple(producer.GetDataInformation().GetExtent()), (0, 63, 0, 47, 0, 0), "2D extent")
 tree2d = ImageToSpacetree(Input=producer)
-mesh2d = SpacetreeTessellate(Input=SpacetreeBalance(Input=tree2d))
+mesh2d = SpacetreeTessellate(Input=SpacetreeBalance(Input=tree2d),
+                             SeparatingFunction="No Function")
 mesh2d_data = vtk_output(mesh2d)
 T.check(T.is_hexahedral_spacetree(vtk_output(tree2d), dimension=2),
         "2D spacetree is not all quads")
@@ -227,6 +228,32 @@ T.check(most <= 2, "2D: an edge is shared by %d triangles" % most)
 vtk_areas = T.per_material(T.vtk_measures(mesh2d_data), material2d)
 for label, count in counts2d.items():
     T.check_close(vtk_areas[label], float(count), 1e-12, "2D vtkCellSizeFilter area of label %d" % label)
+
+# --- the cut (README): default function, surface, and the analytic ball with the sphere widget --
+tessellated = SpacetreeTessellate(Input=balance)
+cut = MarchingSimplices(Input=tessellated)
+cut.UpdatePipeline()
+cut_data = vtk_output(cut)
+T.check_equal(cut_data.GetClassName(), "vtkUnstructuredGrid", "cut mesh class")
+T.check(bool(np.all(T.cell_types(cut_data) == VTK_TETRA)), "the cut mesh has non-tetrahedra")
+T.check_equal(sorted(set(T.cell_array(cut_data, "Material").tolist())), [0, 1], "cut materials")
+T.check_equal(len(set(T.cell_array(cut_data, "OriginalMaterial").tolist())), 117,
+              "original materials (116 labels and the background layer)")
+surface = MarchingSimplices(Input=tessellated, OutputMode="Surface")
+surface.UpdatePipeline()
+T.check_equal(surface.GetDataInformation().GetDataSetTypeAsString(), "vtkPolyData",
+              "surface type (proxy)")
+T.check(surface.GetDataInformation().GetNumberOfCells() > 100000, "the surface is nearly empty")
+ball = SeparatingFunction(Input=tessellated, ImplicitFunction="Sphere")
+ball.ImplicitFunction.Center = [90, 108, 90]
+ball.ImplicitFunction.Radius = 40
+inside_ball = MarchingSimplices(Input=ball, KeepSide="Inside")
+inside_ball.UpdatePipeline()
+bounds = inside_ball.GetDataInformation().GetBounds()
+T.check(inside_ball.GetDataInformation().GetNumberOfCells() > 0, "nothing inside the ball")
+for axis, centre in enumerate((90, 108, 90)):
+    T.check(centre - 40 - 1e-9 <= bounds[2 * axis] and bounds[2 * axis + 1] <= centre + 40 + 1e-9,
+            "the inside of the ball leaves the sphere along axis %d: %r" % (axis, bounds))
 
 print("%s: plugin test passed (%d tetrahedra, %d triangles)"
       % (DRIVER, cells, mesh2d_data.GetNumberOfCells()))

@@ -33,24 +33,38 @@ EXPECTED_PROXIES = {
     ("filters", "stmImageToSpacetree"),
     ("filters", "stmSpacetreeBalance"),
     ("filters", "stmSpacetreeTessellate"),
+    ("filters", "stmMarchingSimplices"),
+    ("filters", "stmSeparatingFunction"),
     ("sources", "stmNIFTIReader"),
 }
 # Properties whose command is not a plain SetX/GetX pair, and what they are checked by instead.
-SPECIAL = {"LabelArray", "Input", "FileName", "BodyLabels", "SizingArray"}
+SPECIAL = {"LabelArray", "Input", "FileName", "BodyLabels", "SizingArray", "FunctionArray",
+           "GrayImage"}
 # Repeated (label, value) pairs: property name -> (count getter, PrintSelf text after setting 5, 3).
 PAIR_PROPERTIES = {
     "LabelMaxCellSizes": ("GetNumberOfLabelMaxCellSizes", "LabelMaxCellSizes: 5:3"),
     "LabelBalanceLevels": ("GetNumberOfLabelBalanceLevels", "LabelBalanceLevels: 5:3"),
 }
 # Implicit-function properties: property name -> getter.
-REGION_PROPERTIES = {"RefinementRegion": "GetRefinementRegion", "BalanceRegion": "GetBalanceRegion"}
+REGION_PROPERTIES = {"RefinementRegion": "GetRefinementRegion", "BalanceRegion": "GetBalanceRegion",
+                     "ImplicitFunction": "GetImplicitFunction"}
+
+# The widgets of each implicit-function property (sorted), when not the regions' four.
+REGION_WIDGETS = {"ImplicitFunction": ["Box", "Cylinder", "Plane", "Quadric", "Sphere"]}
 
 # Lines the PrintSelf of a fresh instance must contain, beyond the generic checks: the defaults
 # in words and result values that are no property.
 PRINTED_DEFAULTS = {
     "stmSpacetreeTessellate": ["OutputType: Simplicial", "TemplateRule: RegularFaces",
                                "CellTemplate: Checkerboard", "IncludeBackground: Off",
-                               "BoundaryLayers: 0", "NumberOfInsertedPoints: 0"],
+                               "BoundaryLayers: 0", "NumberOfInsertedPoints: 0",
+                               "SeparatingFunction: Labels", "SmoothingSigma: 1",
+                               "NumberOfBoundaryLayers: 0"],
+    "stmMarchingSimplices": ["IsoValue: 0", "ZeroTolerance: 1e-09", "OutputMode: Volume",
+                             "KeepSide: Both", "InsideMaterial: 1", "OutsideMaterial: 0",
+                             "NumberOfSplitCells: 0", "NumberOfCutPoints: 0"],
+    "stmSeparatingFunction": ["Mode: ImplicitFunction", "Threshold: 0",
+                              "InsideAboveThreshold: On"],
 }
 
 problems = []
@@ -194,7 +208,8 @@ def check_region_property(where, prop, obj):
         problem("%s: PrintSelf does not show '%s: (none)'" % (where, name))
     domain = prop.find("ProxyListDomain")
     names = sorted(p.get("name") for p in domain.findall("Proxy")) if domain is not None else []
-    if names != ["Box", "Cylinder", "Plane", "Sphere"]:
+    expected = REGION_WIDGETS.get(name, ["Box", "Cylinder", "Plane", "Sphere"])
+    if names != expected:
         problem("%s: the region widgets are %r" % (where, names))
 
 
@@ -238,7 +253,7 @@ def check_label_array(where, prop, obj):
 
 
 xml_files = sorted(glob.glob(os.path.join(XML_DIR, "*.xml")))
-T.check(len(xml_files) == 4, "expected 4 XML files in %s, found %r" % (XML_DIR, xml_files))
+T.check(len(xml_files) == 6, "expected 6 XML files in %s, found %r" % (XML_DIR, xml_files))
 found = set()
 fresh = {}
 for path in xml_files:

@@ -23,6 +23,7 @@ for victim_index in (0, 1):
     balance = spacetreemesh.stmSpacetreeBalance()
     balance.SetInputConnection(tree.GetOutputPort())
     mesher = spacetreemesh.stmSpacetreeTessellate()
+    mesher.SetSeparatingFunction(mesher.NO_FUNCTION)
     mesher.SetInputConnection(balance.GetOutputPort())
     filters = (tree, balance, mesher)
     victim = filters[victim_index]

@@ -47,6 +47,7 @@ def pipeline(source, balance=True, balance_level=1, face_only=False, template=No
         balancer.SetFaceBalanceOnly(face_only)
         last = balancer
     mesher = spacetreemesh.stmSpacetreeTessellate()
+    mesher.SetSeparatingFunction(mesher.NO_FUNCTION)  # the staircase mesh
     mesher.SetInputConnection(last.GetOutputPort())
     if template is not None:
         mesher.SetCellTemplate(template)
@@ -234,6 +235,7 @@ for level in (1, 2, 3):
         T.check(bool(np.all(level_map >= unbalanced_level)), "%s: a leaf was coarsened" % what)
         leaf_counts[(level, face_only)] = balanced.GetNumberOfCells()
         mesher = spacetreemesh.stmSpacetreeTessellate()
+        mesher.SetSeparatingFunction(mesher.NO_FUNCTION)  # the staircase mesh
         mesher.SetInputConnection(balance.GetOutputPort())
         mesher.Update()
         T.check_measures(mesher.GetOutput(), jump_counts, 1.0, 1e-12, what)

@@ -67,6 +67,7 @@ struct AalTrees
     tessellate->SetOutputType(outputType);
     tessellate->SetTemplateRule(templateRule);
     tessellate->SetBoundaryLayers(boundaryLayers);
+    tessellate->SetSeparatingFunction(stmSpacetreeTessellate::NO_FUNCTION);
     tessellate->Update();
     return tessellate;
   }

@@ -11,9 +11,15 @@
 
 #include "Check/MeshInvariants.h"
 
+#include <gtest/gtest.h>
+
+#include "vtkAlgorithm.h"
+#include "vtkCallbackCommand.h"
 #include "vtkCellData.h"
 #include "vtkCellTypes.h"
+#include "vtkCommand.h"
 #include "vtkDataArray.h"
+#include "vtkDataSet.h"
 #include "vtkIdList.h"
 #include "vtkImageData.h"
 #include "vtkNew.h"
@@ -27,10 +33,39 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <string>
 #include <vector>
 
 namespace stmTest
 {
+
+/// Collects error messages of an algorithm instead of printing them.
+class ErrorRecorder
+{
+public:
+  explicit ErrorRecorder(vtkObject* object)
+  {
+    this->Callback->SetClientData(this);
+    this->Callback->SetCallback([](vtkObject*, unsigned long, void* self, void* message)
+      { static_cast<ErrorRecorder*>(self)->Messages += static_cast<const char*>(message); });
+    object->AddObserver(vtkCommand::ErrorEvent, this->Callback);
+  }
+  std::string Messages;
+
+private:
+  vtkNew<vtkCallbackCommand> Callback;
+};
+
+/// Updates the algorithm and expects an error containing `expected` and an empty output.
+inline void ExpectErrorAndEmptyOutput(vtkAlgorithm* algorithm, const std::string& expected)
+{
+  ErrorRecorder errors(algorithm);
+  algorithm->Update();
+  EXPECT_NE(errors.Messages.find(expected), std::string::npos)
+    << "expected \"" << expected << "\" in: " << errors.Messages;
+  auto* output = vtkDataSet::SafeDownCast(algorithm->GetOutputDataObject(0));
+  EXPECT_TRUE(output == nullptr || output->GetNumberOfCells() == 0);
+}
 
 /// A point-data label image: label(i, j, k) for every voxel.
 inline vtkSmartPointer<vtkImageData> MakeLabelImage(const int dims[3], const double spacing[3],
@@ -94,6 +129,8 @@ struct Pipeline
     this->Balance->SetInputConnection(this->Tree->GetOutputPort());
     this->Balance->SetBalanceLevel(std::max(1, balanceLevel));
     this->Tessellate->SetCellTemplate(cellTemplate);
+    // The staircase mesh of the voxels: these tests compare it with the voxel model exactly.
+    this->Tessellate->SetSeparatingFunction(stmSpacetreeTessellate::NO_FUNCTION);
     if (balanceLevel > 0)
     {
       this->Tessellate->SetInputConnection(this->Balance->GetOutputPort());

@@ -1,0 +1,143 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#ifndef stmCoreSeparatingFunction_h
+#define stmCoreSeparatingFunction_h
+
+// Separating functions from voxels (the paper's section 3.1): the body-of-interest indicator of
+// the voxels (-1 inside, +1 outside), and its d-linear interpolation on the dual grid, whose
+// nodes are the voxel centres. At a voxel corner the interpolant is the exact average of the 2^d
+// voxels around it, so for the indicator it takes the values i / 2^(d-1) (eq. 2), 0 on a flat
+// interface. Voxels beyond the image are outside.
+
+#include "../Common/Execution.h"
+#include "../Common/Status.h"
+#include "../Spacetree/Spacetree.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace stm
+{
+
+/// Values at the voxel centres of an image (axis 0 fastest).
+template <int Dim, class Value>
+struct VoxelField
+{
+  LatticeIndex<Dim> Dimensions{};
+  const Value* Values = nullptr;
+  /// The value of every voxel beyond the image.
+  double Outside = 1.0;
+
+  double At(const LatticeIndex<Dim>& voxel) const
+  {
+    std::int64_t index = 0;
+    for (int axis = Dim - 1; axis >= 0; --axis)
+    {
+      if (voxel[axis] < 0 || voxel[axis] >= this->Dimensions[axis])
+      {
+        return this->Outside;
+      }
+      index = index * this->Dimensions[axis] + voxel[axis];
+    }
+    return static_cast<double>(this->Values[index]);
+  }
+
+  /// d-linear interpolation on the dual grid at a point in voxel units (0: the outer corner of
+  /// the first voxel; voxel i is centred at i + 1/2).
+  double Sample(const double* position) const
+  {
+    LatticeIndex<Dim> lower;
+    double weights[Dim];
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      const double dual = position[axis] - 0.5;
+      const double floor = std::floor(dual);
+      lower[axis] = static_cast<std::int64_t>(floor);
+      weights[axis] = dual - floor;
+    }
+    double sum = 0.0;
+    for (unsigned corner = 0; corner < (1u << Dim); ++corner)
+    {
+      double weight = 1.0;
+      LatticeIndex<Dim> voxel = lower;
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        const bool upper = (corner >> axis) & 1u;
+        voxel[axis] += upper ? 1 : 0;
+        weight *= upper ? weights[axis] : 1.0 - weights[axis];
+      }
+      if (weight != 0.0)
+      {
+        sum += weight * this->At(voxel);
+      }
+    }
+    return sum;
+  }
+};
+
+/// The body-of-interest indicator of a spacetree's voxels: -1 where the leaf covering the voxel
+/// is a body material, +1 for the background. Every voxel is written once (by the leaf holding
+/// its first lattice cell), so leaves fill it in parallel.
+template <int Dim, class Executor>
+Status BodyIndicator(
+  const Spacetree<Dim>& tree, std::vector<std::int8_t>& indicator, Executor& executor)
+{
+  std::int64_t voxels = 1;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    voxels *= tree.ImageDimensions[axis];
+  }
+  indicator.assign(static_cast<std::size_t>(voxels), 1);
+  struct FillKernel
+  {
+    using Scratch = NoScratch;
+    const Spacetree<Dim>* Tree;
+    std::int8_t* Indicator;
+    Executor* Exec;
+    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    {
+      const Spacetree<Dim>& tree = *this->Tree;
+      for (std::int64_t leaf = begin; leaf < end && !this->Exec->ShouldAbort(); ++leaf)
+      {
+        if (tree.LeafMaterials[leaf] == BackgroundMaterial)
+        {
+          continue;
+        }
+        const LatticeIndex<Dim>& anchor = tree.LeafAnchors[leaf];
+        const LatticeIndex<Dim>& size = tree.GetCellSize(tree.LeafLevels[leaf]);
+        LatticeIndex<Dim> first, last;
+        bool empty = false;
+        for (int axis = 0; axis < Dim; ++axis)
+        {
+          const std::int64_t sub = tree.VoxelSubdivision[axis];
+          first[axis] = (anchor[axis] + sub - 1) / sub;
+          last[axis] = std::min<std::int64_t>(
+            (anchor[axis] + size[axis] + sub - 1) / sub, tree.ImageDimensions[axis]);
+          empty = empty || first[axis] >= last[axis];
+        }
+        if (empty)
+        {
+          continue;
+        }
+        ForEachLatticePoint<Dim>(first, last,
+          [&](const LatticeIndex<Dim>& voxel)
+          {
+            std::int64_t index = 0;
+            for (int axis = Dim - 1; axis >= 0; --axis)
+            {
+              index = index * tree.ImageDimensions[axis] + voxel[axis];
+            }
+            this->Indicator[index] = -1;
+          });
+      }
+    }
+  };
+  FillKernel kernel{ &tree, indicator.data(), &executor };
+  executor.For(0, tree.GetNumberOfLeaves(), 1024, kernel);
+  return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
+}
+
+} // namespace stm
+
+#endif

@@ -1,0 +1,214 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "stmSeparatingFunction.h"
+
+#include "stmFunctionValues.h"
+
+#include "Cut/SeparatingFunction.h"
+
+#include "vtkDataArray.h"
+#include "vtkDoubleArray.h"
+#include "vtkImageData.h"
+#include "vtkImplicitFunction.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkNew.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+#include "vtkPointSet.h"
+#include "vtkPoints.h"
+#include "vtkSMPTools.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+vtkStandardNewMacro(stmSeparatingFunction);
+vtkCxxSetObjectMacro(stmSeparatingFunction, ImplicitFunction, vtkImplicitFunction);
+
+stmSeparatingFunction::stmSeparatingFunction()
+{
+  this->SetNumberOfInputPorts(2);
+}
+
+stmSeparatingFunction::~stmSeparatingFunction()
+{
+  this->SetImplicitFunction(nullptr);
+}
+
+void stmSeparatingFunction::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "Mode: " << (this->Mode == IMPLICIT_FUNCTION ? "ImplicitFunction" : "GrayImage")
+     << "\n";
+  os << indent << "ImplicitFunction: " << (this->ImplicitFunction ? "" : "(none)\n");
+  if (this->ImplicitFunction)
+  {
+    os << "\n";
+    this->ImplicitFunction->PrintSelf(os, indent.GetNextIndent());
+  }
+  os << indent << "Threshold: " << this->Threshold << "\n";
+  os << indent << "InsideAboveThreshold: " << (this->InsideAboveThreshold ? "On" : "Off") << "\n";
+}
+
+vtkMTimeType stmSeparatingFunction::GetMTime()
+{
+  vtkMTimeType time = this->Superclass::GetMTime();
+  if (this->ImplicitFunction)
+  {
+    time = std::max(time, this->ImplicitFunction->GetMTime());
+  }
+  return time;
+}
+
+int stmSeparatingFunction::FillInputPortInformation(int port, vtkInformation* info)
+{
+  if (port == 1)
+  {
+    info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkImageData");
+    info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
+    return 1;
+  }
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkPointSet");
+  return 1;
+}
+
+namespace
+{
+/// f at every point from the gray image: trilinear on the image's point grid (voxel values at
+/// the points), minus the threshold, negated for a bright inside.
+bool SampleGrayImage(vtkImageData* image, double threshold, bool insideAbove, vtkPoints* points,
+  double* f, std::string& error)
+{
+  vtkDataArray* scalars = image->GetPointData()->GetScalars();
+  if (!scalars)
+  {
+    error = "the gray image has no point scalars";
+    return false;
+  }
+  int dims[3];
+  image->GetDimensions(dims);
+  if (static_cast<vtkIdType>(dims[0]) * dims[1] * dims[2] == 0)
+  {
+    error = "the gray image is empty";
+    return false;
+  }
+  std::vector<double> gray(static_cast<std::size_t>(scalars->GetNumberOfTuples()));
+  if (scalars->GetNumberOfComponents() == 1)
+  {
+    std::vector<double> storage;
+    const double* values = stmFunctionValues::AsDoubles(scalars, storage);
+    std::copy(values, values + gray.size(), gray.begin());
+  }
+  else
+  {
+    for (vtkIdType i = 0; i < scalars->GetNumberOfTuples(); ++i)
+    {
+      gray[i] = scalars->GetComponent(i, 0);
+    }
+  }
+  const double sign = insideAbove ? -1.0 : 1.0;
+  double outside = 1.0;
+  for (double& value : gray)
+  {
+    value = sign * (value - threshold);
+    if (std::isfinite(value))
+    {
+      outside = std::max(outside, value);
+    }
+  }
+  const stm::VoxelField<3, double> field{ { dims[0], dims[1], dims[2] }, gray.data(), outside };
+  vtkSMPTools::For(0, points->GetNumberOfPoints(),
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      for (vtkIdType p = begin; p < end; ++p)
+      {
+        double x[3], index[3];
+        points->GetPoint(p, x);
+        image->TransformPhysicalPointToContinuousIndex(x, index);
+        // Flat axes have one sample: take it wherever the point is along them.
+        for (int axis = 0; axis < 3; ++axis)
+        {
+          index[axis] = dims[axis] == 1 ? 0.5 : index[axis] + 0.5;
+        }
+        f[p] = field.Sample(index);
+      }
+    });
+  return true;
+}
+} // namespace
+
+int stmSeparatingFunction::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkPointSet* input = vtkPointSet::GetData(inputVector[0], 0);
+  vtkPointSet* output = vtkPointSet::GetData(outputVector, 0);
+  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
+  if (inInfo && inInfo->Get(vtkAlgorithm::ABORTED()))
+  {
+    output->Initialize();
+    return 1;
+  }
+  auto fail = [&](const std::string& message)
+  {
+    output->Initialize();
+    vtkErrorMacro(<< "SeparatingFunction failed: " << message);
+    return 0;
+  };
+  if (!input || !input->GetPoints() || input->GetNumberOfPoints() == 0)
+  {
+    return fail("the input has no points");
+  }
+  output->ShallowCopy(input);
+  const vtkIdType count = input->GetNumberOfPoints();
+  vtkNew<vtkDoubleArray> function;
+  function->SetName("SeparatingFunction");
+  function->SetNumberOfValues(count);
+  double* f = function->GetPointer(0);
+  this->UpdateProgress(0.1);
+  if (this->Mode == IMPLICIT_FUNCTION)
+  {
+    if (!this->ImplicitFunction)
+    {
+      return fail("no implicit function is set (Mode is Implicit Function)");
+    }
+    vtkImplicitFunction* implicit = this->ImplicitFunction;
+    vtkPoints* points = input->GetPoints();
+    // vtkImplicitFunction::FunctionValue is not documented as thread-safe: evaluate serially,
+    // polling abort every block.
+    const vtkIdType block = 65536;
+    for (vtkIdType first = 0; first < count; first += block)
+    {
+      if (this->CheckAbort())
+      {
+        output->Initialize();
+        return 1;
+      }
+      const vtkIdType last = std::min(count, first + block);
+      for (vtkIdType p = first; p < last; ++p)
+      {
+        double x[3];
+        points->GetPoint(p, x);
+        f[p] = implicit->FunctionValue(x);
+      }
+      this->UpdateProgress(0.1 + 0.8 * static_cast<double>(last) / static_cast<double>(count));
+    }
+  }
+  else
+  {
+    vtkImageData* image = vtkImageData::GetData(inputVector[1], 0);
+    if (!image)
+    {
+      return fail("no gray image on input port 1 (Mode is Gray Image)");
+    }
+    std::string error;
+    if (!SampleGrayImage(
+          image, this->Threshold, this->InsideAboveThreshold, input->GetPoints(), f, error))
+    {
+      return fail(error);
+    }
+  }
+  output->GetPointData()->SetScalars(function);
+  this->UpdateProgress(1.0);
+  return 1;
+}
