@@ -15,12 +15,14 @@
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
 #include "vtkIntArray.h"
+#include "vtkMath.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkSMPTools.h"
+#include "vtkTriangle.h"
 #include "vtkTypeInt32Array.h"
 #include "vtkTypeInt64Array.h"
 #include "vtkUnsignedCharArray.h"
@@ -299,9 +301,7 @@ stm::Status CutSurface(CutRequest& request, stm::MarchingSimplices<Dim>& cutter,
           u[r][c] = x[r + 1][c] - x[0][c];
         }
       }
-      const double det = u[0][0] * (u[1][1] * u[2][2] - u[1][2] * u[2][1]) -
-        u[0][1] * (u[1][0] * u[2][2] - u[1][2] * u[2][0]) +
-        u[0][2] * (u[1][0] * u[2][1] - u[1][1] * u[2][0]);
+      const double det = vtkMath::Determinant3x3(u);
       if (det < 0)
       {
         std::swap(facets[f * Dim], facets[f * Dim + 1]);
@@ -341,16 +341,7 @@ stm::Status CutSurface(CutRequest& request, stm::MarchingSimplices<Dim>& cutter,
       points->GetPoint(facets[f * Dim], a);
       points->GetPoint(facets[f * Dim + 1], b);
       points->GetPoint(facets[f * Dim + 2], c);
-      const double u[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
-      const double v[3] = { c[0] - a[0], c[1] - a[1], c[2] - a[2] };
-      n[0] = u[1] * v[2] - u[2] * v[1];
-      n[1] = u[2] * v[0] - u[0] * v[2];
-      n[2] = u[0] * v[1] - u[1] * v[0];
-      const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-      for (double& component : n)
-      {
-        component = length > 0 ? component / length : 0.0;
-      }
+      vtkTriangle::ComputeNormal(a, b, c, n);
       normals->SetTuple(f, n);
     }
     outCD->SetNormals(normals);

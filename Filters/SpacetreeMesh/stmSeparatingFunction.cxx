@@ -93,15 +93,20 @@ bool SampleGrayImage(vtkImageData* image, double threshold, bool insideAbove, vt
     error = "the gray image is empty";
     return false;
   }
-  std::vector<double> gray(static_cast<std::size_t>(scalars->GetNumberOfTuples()));
+  // f is computed in place, so a double array the image owns is copied once, anything else
+  // converted once.
+  std::vector<double> gray;
   if (scalars->GetNumberOfComponents() == 1)
   {
-    std::vector<double> storage;
-    const double* values = stmFunctionValues::AsDoubles(scalars, storage);
-    std::copy(values, values + gray.size(), gray.begin());
+    const double* values = stmFunctionValues::AsDoubles(scalars, gray);
+    if (values != gray.data())
+    {
+      gray.assign(values, values + scalars->GetNumberOfTuples());
+    }
   }
   else
   {
+    gray.resize(static_cast<std::size_t>(scalars->GetNumberOfTuples()));
     for (vtkIdType i = 0; i < scalars->GetNumberOfTuples(); ++i)
     {
       gray[i] = scalars->GetComponent(i, 0);

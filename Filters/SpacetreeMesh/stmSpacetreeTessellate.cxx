@@ -17,6 +17,7 @@
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
 #include "vtkIntArray.h"
+#include "vtkMath.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
@@ -374,11 +375,7 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   bool mirrored = false;
   if (Dim == 3)
   {
-    const double(*a)[3] = geometry.AxisVectors;
-    const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
-      a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
-      a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
-    mirrored = det < 0;
+    mirrored = vtkMath::Determinant3x3(geometry.AxisVectors) < 0;
   }
 
   // Cells, 32-bit connectivity whenever the sizes allow.

@@ -17,6 +17,8 @@
 // It also reports the volume of each material and the measure of the boundary, for exact
 // comparisons with the voxel model: sums of exact determinants, divided once.
 
+#include "../Common/Determinant.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -105,36 +107,6 @@ SortedKey<K> MakeKey(const std::int64_t* ids, int count)
     key.Ids[j] = ids[i];
   }
   return key;
-}
-
-/// Determinant by the Leibniz formula: exact for the small dyadic entries of lattice meshes.
-template <int K>
-double LeibnizDeterminant(const double (&m)[K][K])
-{
-  int permutation[K];
-  for (int i = 0; i < K; ++i)
-  {
-    permutation[i] = i;
-  }
-  double sum = 0.0;
-  do
-  {
-    int inversions = 0;
-    for (int i = 0; i < K; ++i)
-    {
-      for (int j = i + 1; j < K; ++j)
-      {
-        inversions += permutation[i] > permutation[j];
-      }
-    }
-    double product = 1.0;
-    for (int row = 0; row < K; ++row)
-    {
-      product *= m[row][permutation[row]];
-    }
-    sum += (inversions % 2 == 0) ? product : -product;
-  } while (std::next_permutation(permutation, permutation + K));
-  return sum;
 }
 
 /// A cell or a face of a cell: the cone with Apexes apexes (outermost first) over a cube of
@@ -364,7 +336,7 @@ MeshInvariantReport CheckCells(const std::vector<double>& points,
             m[row][col] = p[col] - p0[col];
           }
         }
-        const double determinant = sign * LeibnizDeterminant<Dim>(m);
+        const double determinant = sign * Determinant<Dim>(m);
         positive = positive && determinant > 0.0;
         cellDeterminant += determinant;
       });
@@ -457,7 +429,7 @@ MeshInvariantReport CheckCells(const std::vector<double>& points,
                   gram[i][j] = dot;
                 }
               }
-              scaledBoundary += std::sqrt(std::max(0.0, LeibnizDeterminant<Dim - 1>(gram)));
+              scaledBoundary += std::sqrt(std::max(0.0, Determinant<Dim - 1>(gram)));
             });
           ForEachFacet<Dim>(facet,
             [&](const Polytope<Dim>& ridge)

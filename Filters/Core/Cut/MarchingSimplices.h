@@ -24,6 +24,7 @@
 // A simplex without both signs is not split. When all its vertices are zero (the paper's n0 = 4
 // case) the caller decides its side (the paper: the material of the underlying cell).
 
+#include "../Common/Determinant.h"
 #include "../Common/Execution.h"
 #include "../Common/Status.h"
 
@@ -174,7 +175,7 @@ struct PieceVertex
 
 /// Puts a piece simplex into the parent's orientation: the sign of the determinant of its
 /// barycentric coordinates (cut vertices at the edge midpoints; the sign holds for any cut
-/// parameters in (0, 1) because the pieces stay non-degenerate). Exact in floating point.
+/// parameters in (0, 1) because the pieces stay non-degenerate). Exact: the entries are 0, 1/2, 1.
 template <int Dim>
 void OrientLikeParent(PieceVertex* simplex)
 {
@@ -192,39 +193,7 @@ void OrientLikeParent(PieceVertex* simplex)
       m[r][simplex[r].B] += 0.5;
     }
   }
-  double determinant = 1.0;
-  for (int c = 0; c < n; ++c)
-  {
-    int pivot = c;
-    for (int r = c + 1; r < n; ++r)
-    {
-      if (std::abs(m[r][c]) > std::abs(m[pivot][c]))
-      {
-        pivot = r;
-      }
-    }
-    if (pivot != c)
-    {
-      for (int k = 0; k < n; ++k)
-      {
-        std::swap(m[c][k], m[pivot][k]);
-      }
-      determinant = -determinant;
-    }
-    determinant *= m[c][c];
-    if (m[c][c] == 0.0)
-    {
-      return;
-    }
-    for (int r = c + 1; r < n; ++r)
-    {
-      const double factor = m[r][c] / m[c][c];
-      for (int k = c; k < n; ++k)
-      {
-        m[r][k] -= factor * m[c][k];
-      }
-    }
-  }
+  const double determinant = Determinant<n>(m);
   if (determinant < 0)
   {
     std::swap(simplex[0], simplex[1]);

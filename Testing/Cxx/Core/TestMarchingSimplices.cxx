@@ -6,6 +6,7 @@
 #include "CoreTestUtilities.h"
 
 #include "Check/MeshInvariants.h"
+#include "Common/Determinant.h"
 #include "Cut/MarchingSimplices.h"
 #include "Cut/SeparatingFunction.h"
 
@@ -38,34 +39,7 @@ double ScaledVolume(const std::vector<double>& coordinates, const std::int64_t* 
       m[r][c] = coordinates[ids[r + 1] * D + c] - coordinates[ids[0] * D + c];
     }
   }
-  double determinant = 1.0;
-  for (int c = 0; c < D; ++c)
-  {
-    int pivot = c;
-    for (int r = c + 1; r < D; ++r)
-    {
-      pivot = std::abs(m[r][c]) > std::abs(m[pivot][c]) ? r : pivot;
-    }
-    if (pivot != c)
-    {
-      std::swap(m[c], m[pivot]);
-      determinant = -determinant;
-    }
-    if (m[c][c] == 0.0)
-    {
-      return 0.0;
-    }
-    determinant *= m[c][c];
-    for (int r = c + 1; r < D; ++r)
-    {
-      const double factor = m[r][c] / m[c][c];
-      for (int k = c; k < D; ++k)
-      {
-        m[r][k] -= factor * m[c][k];
-      }
-    }
-  }
-  return determinant;
+  return stm::Determinant<D>(m);
 }
 
 /// A simplicial mesh cut by marching simplices, with the cut vertices' coordinates and values.
