@@ -27,7 +27,10 @@ TRIANGLE, QUAD, TETRA, HEXAHEDRON, PYRAMID = 5, 9, 10, 12, 14
 CELL_TYPE_NAMES = {TRIANGLE: "triangle", QUAD: "quad", TETRA: "tetra", HEXAHEDRON: "hexahedron",
                    PYRAMID: "pyramid"}
 STAGES_TESSELLATE = ["read", "spacetree", "balance", "tessellate", "write"]
-STAGES_CUT = ["read", "spacetree", "balance", "tessellate", "cut", "write"]
+# --stop-after cut: no smooth stage.
+STAGES_CUT = ["read", "spacetree", "balance", "tessellate", "snap", "cut", "write"]
+# The default pipeline with a separating function: snap before the cut, smooth after it.
+STAGES_ALL = ["read", "spacetree", "balance", "tessellate", "snap", "cut", "smooth", "write"]
 # The staircase mesh of the voxels, as before the cut stage existed: the cases that check exact
 # tessellation counts, stages or volumes per label give this.
 STAIRCASE = ["--separating", "none"]
@@ -42,7 +45,8 @@ DEFAULT_TESSELLATE_PARAMETERS = {
     "boundary_layers": 0}
 # The cut parameters of the summary when none of their options is given, and with STAIRCASE.
 DEFAULT_CUT_PARAMETERS = {"separating": "labels", "output_mode": "volume", "keep": "both",
-                          "iso": 0}
+                          "iso": 0, "alpha": 1.0 / 3.0, "snap": "quality",
+                          "smooth_iterations": 20, "smooth_method": "taubin"}
 STAIRCASE_CUT_PARAMETERS = dict(DEFAULT_CUT_PARAMETERS, separating="none")
 
 
@@ -197,7 +201,9 @@ def case_help_and_version(c):
                    "--cell-template checkerboard|kuhn", "--boundary-layer N",
                    "--separating labels|smooth:SIGMA|gray:FILE:ISO|sphere:CX,CY,CZ,R|none",
                    "--output-mode volume|surface", "--keep both|inside|outside", "--iso V",
-                   "--stop-after spacetree|balance|tessellate|cut"]:
+                   "--alpha A", "--snap threshold|quality|none", "--smooth-iterations N",
+                   "--smooth-method taubin|laplacian",
+                   "--stop-after spacetree|balance|tessellate|snap|cut|smooth"]:
         check(option in out, "help does not mention %s" % option)
     out, _ = c.run_ok(["-h"])
     check(out.startswith("Usage: stmesh"), "-h does not print the usage")
@@ -1547,33 +1553,49 @@ def enclosed_volume(surface):
     return total
 
 
+def option_value(arguments, name, default):
+    """The value of --name in an argument list, or the default."""
+    return arguments[arguments.index(name) + 1] if name in arguments else default
+
+
 def cut_run(c, image, name, arguments, inside=1, extension=".vtu"):
     """stmesh IMAGE -o NAME.vtu --summary NAME.json ARGUMENTS with a cut stage (volume output):
     the summary, its tessellate and cut stages, the read-back mesh, stdout and stderr, after
-    checking that they agree: the stages, the cells and points, the cells inside (Material
-    INSIDE) and outside (0), the per-material counts and the line below the table."""
+    checking that they agree: the stages (snap, cut and smooth unless --stop-after cut), the
+    cells and points, the cells inside (Material INSIDE) and outside (0), the per-material
+    counts and the lines below the table. With smoothing the cut keeps both sides and --keep
+    acts after the smoothing, so the file's sides are the cut's, or one of them."""
     output, summary_path = c.path(name + extension), c.path(name + ".json")
     out, err = c.run_ok([image, "-o", output, "--summary", summary_path] + arguments)
     summary, mesh = load_summary(summary_path), read_cut(output)
-    check([entry["name"] for entry in summary["stages"]] == STAGES_CUT,
+    stop_after = option_value(arguments, "--stop-after", "smooth")
+    stages = STAGES_CUT if stop_after == "cut" else STAGES_ALL
+    check([entry["name"] for entry in summary["stages"]] == stages,
           "%s: stages %s" % (name, [entry["name"] for entry in summary["stages"]]))
-    check_table(out, STAGES_CUT)
-    check(summary["parameters"]["stop_after"] == "cut", "%s: stop_after %s" %
+    check_table(out, stages)
+    check(summary["parameters"]["stop_after"] == stop_after, "%s: stop_after %s" %
           (name, summary["parameters"]["stop_after"]))
     tessellate, cut = stage(summary, "tessellate"), stage(summary, "cut")
-    check(cut["cells"] == mesh["cells"] and cut["points"] == mesh["points"],
+    smooth = stage(summary, "smooth") if stop_after == "smooth" else None
+    smoothed = smooth is not None and not smooth["skipped"]
+    last = smooth if smoothed else cut
+    check(last["cells"] == mesh["cells"] and last["points"] == mesh["points"],
           "%s: the summary says %d cells, %d points, the file has %d, %d" %
-          (name, cut["cells"], cut["points"], mesh["cells"], mesh["points"]))
+          (name, last["cells"], last["points"], mesh["cells"], mesh["points"]))
     check(mesh["materials"] is not None and mesh["original"] is not None,
           "%s: no Material or OriginalMaterial" % name)
     check(set(mesh["materials"]) <= {inside, 0},
           "%s: Material values %s, expected %d inside and 0 outside" %
           (name, sorted(set(mesh["materials"])), inside))
     inside_cells = mesh["materials"].count(inside)
-    check(cut["inside_cells"] == inside_cells and
-          cut["outside_cells"] == mesh["cells"] - inside_cells,
-          "%s: inside_cells %s, outside_cells %s; the file has %d and %d" %
-          (name, cut["inside_cells"], cut["outside_cells"], inside_cells,
+    keep = option_value(arguments, "--keep", "both")
+    expected = (cut["inside_cells"], cut["outside_cells"])
+    if smoothed:
+        expected = (expected[0] if keep != "outside" else 0,
+                    expected[1] if keep != "inside" else 0)
+    check(expected == (inside_cells, mesh["cells"] - inside_cells),
+          "%s: inside_cells %s, outside_cells %s (--keep %s); the file has %d and %d" %
+          (name, cut["inside_cells"], cut["outside_cells"], keep, inside_cells,
            mesh["cells"] - inside_cells))
     key = "triangles_per_material" if TRIANGLE in mesh["types"] else "tetrahedra_per_material"
     counts = {}
@@ -1587,6 +1609,24 @@ def cut_run(c, image, name, arguments, inside=1, extension=".vtu"):
     line = "cut: %d split cells, %d cut points; %d inside cells, %d outside cells" % (
         cut["split_cells"], cut["cut_points"], cut["inside_cells"], cut["outside_cells"])
     check(line in out.splitlines(), "%s: stdout lacks the line %r" % (name, line))
+    snap = stage(summary, "snap")
+    if not snap["skipped"]:
+        check(isinstance(snap["snapped_points"], int) and snap["snapped_points"] >= 0 and
+              isinstance(snap["refused_snaps"], int) and snap["refused_snaps"] >= 0,
+              "%s: bad snap figures %s" % (name, snap))
+        # Snapping moves points; it adds and removes none.
+        check(snap["points"] == tessellate["points"] and snap["cells"] == tessellate["cells"],
+              "%s: the snap stage changed the mesh's size" % name)
+        line = "snap: %d snapped points, %d refused snaps" % (snap["snapped_points"],
+                                                              snap["refused_snaps"])
+        check(line in out.splitlines(), "%s: stdout lacks the line %r" % (name, line))
+    if smoothed:
+        check(isinstance(smooth["moved_points"], int) and smooth["moved_points"] >= 0 and
+              isinstance(smooth["rejected_moves"], int) and smooth["rejected_moves"] >= 0,
+              "%s: bad smooth figures %s" % (name, smooth))
+        line = "smooth: %d moved points, %d rejected moves" % (smooth["moved_points"],
+                                                              smooth["rejected_moves"])
+        check(line in out.splitlines(), "%s: stdout lacks the line %r" % (name, line))
     layers = tessellate["boundary_layers"]
     check(("; %d boundary layer%s" % (layers, "" if layers == 1 else "s")) in out,
           "%s: stdout does not show the %d boundary layers" % (name, layers))
@@ -1606,9 +1646,10 @@ def staircase_volume(c, image, name, layers):
 def case_cut_default(c):
     image, voxels = write_label_image(c, "ball.vti", (16, 15, 14), ball)
     summary, tessellate, cut, mesh, out, _ = cut_run(c, image, "default", [])
+    # Snapping and smoothing are part of the default pipeline, which now stops after smooth.
     check(summary["parameters"] == dict(
         {"labels": [], "all_labels": True, "max_cell_size": 16, "balance": 1,
-         "stop_after": "cut", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS,
+         "stop_after": "smooth", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS,
         **DEFAULT_TESSELLATE_PARAMETERS, **DEFAULT_CUT_PARAMETERS),
         "bad parameters %s" % summary["parameters"])
     check(mesh["types"] == {TETRA}, "cell types %s, expected tetrahedra" % mesh["types"])
@@ -1628,8 +1669,8 @@ def case_cut_default(c):
     for entry in summary["stages"]:
         if entry["name"] != "cut":
             check("split_cells" not in entry, "stage %s has cut figures" % entry["name"])
-    # Volume conservation: the cut covers exactly the domain of the staircase mesh with one
-    # background layer.
+    # Volume conservation: snapping and smoothing move only points inside the domain, and the
+    # cut covers exactly the domain of the staircase mesh with one background layer.
     total = sum(mesh["measures"])
     staircase = staircase_volume(c, image, "staircase", 1)
     check(close(total, staircase), "the cut mesh measures %r, the staircase mesh with one "
@@ -1646,8 +1687,9 @@ def case_cut_default(c):
     _, _, _, both, _, _ = cut_run(c, image, "labels13", ["--labels", "3,1"])
     check(set(both["materials"]) == {1, 0}, "--labels 3,1: Material values %s" %
           sorted(set(both["materials"])))
-    # Legacy VTK output and an explicit --stop-after cut give the same mesh.
-    _, _, _, legacy, _, _ = cut_run(c, image, "legacy", ["--stop-after", "cut"], extension=".vtk")
+    # Legacy VTK output and an explicit --stop-after smooth give the same mesh.
+    _, _, _, legacy, _, _ = cut_run(c, image, "legacy", ["--stop-after", "smooth"],
+                                    extension=".vtk")
     check(legacy == mesh, "the .vtk cut mesh differs from the .vtu")
     # --stop-after tessellate writes the tessellation with the function and its layer.
     output, summary_path = c.path("tessellation.vtu"), c.path("tessellation.json")
@@ -1670,7 +1712,14 @@ def case_cut_keep(c):
     check(summary["parameters"]["keep"] == "inside", "bad keep parameter")
     check(set(inside["materials"]) == {1}, "--keep inside: Material values %s" %
           sorted(set(inside["materials"])))
-    check(cut["outside_cells"] == 0, "--keep inside: outside_cells %s" % cut["outside_cells"])
+    # With smoothing (the default) the cut keeps both sides and the outside goes after the
+    # smoothing; without it, the cut keeps only the inside.
+    check(cut["outside_cells"] > 0, "--keep inside: outside_cells %s" % cut["outside_cells"])
+    _, _, unsmoothed, _, _, _ = cut_run(c, image, "inside_cut", ["--keep", "inside",
+                                                                 "--stop-after", "cut"])
+    check(unsmoothed["outside_cells"] == 0 and unsmoothed["inside_cells"] == cut["inside_cells"],
+          "--keep inside --stop-after cut: inside_cells %s, outside_cells %s" %
+          (unsmoothed["inside_cells"], unsmoothed["outside_cells"]))
     _, _, _, outside, _, _ = cut_run(c, image, "outside", ["--keep", "outside"])
     check(set(outside["materials"]) == {0}, "--keep outside: Material values %s" %
           sorted(set(outside["materials"])))
@@ -1698,16 +1747,20 @@ def case_cut_surface(c):
     output, summary_path = c.path("surface.vtp"), c.path("surface.json")
     out, _ = c.run_ok([image, "-o", output, "--summary", summary_path, "--output-mode",
                        "surface"])
-    check_table(out, STAGES_CUT)
+    check_table(out, STAGES_ALL)
     summary = load_summary(summary_path)
     check(summary["parameters"]["output_mode"] == "surface", "bad output_mode parameter")
     surface = read_surface(output)
-    cut = stage(summary, "cut")
+    # With smoothing (the default) the cut keeps both sides in volume mode, and the smooth
+    # stage takes the surface from the smoothed mesh: its figures describe the surface.
+    cut, smooth = stage(summary, "cut"), stage(summary, "smooth")
     check(surface["types"] == {TRIANGLE}, "surface cell types %s" % surface["types"])
-    check(cut["cells"] == len(surface["cells"]) and cut["points"] == len(surface["points"]),
+    check(smooth["cells"] == len(surface["cells"]) and smooth["points"] == len(surface["points"]),
           "the summary says %d cells, %d points, the file has %d, %d" %
-          (cut["cells"], cut["points"], len(surface["cells"]), len(surface["points"])))
-    check("inside_cells" not in cut and cut["split_cells"] > 0, "bad cut figures %s" % cut)
+          (smooth["cells"], smooth["points"], len(surface["cells"]), len(surface["points"])))
+    check(smooth["surface_cells"] == smooth["cells"], "bad surface_cells %s" % smooth)
+    check(cut["inside_cells"] > 0 and cut["outside_cells"] > 0 and cut["split_cells"] > 0,
+          "bad cut figures %s" % cut)
     check("Normals" in surface["cell_arrays"], "the surface has no Normals")
     counts = {}
     for material in surface["original"]:
@@ -1715,14 +1768,33 @@ def case_cut_surface(c):
     check(summary.get("triangles_per_original_material") == counts,
           "triangles_per_original_material %s, the file has %s" %
           (summary.get("triangles_per_original_material"), counts))
-    check("cut: %d split cells, %d cut points; a surface of %d triangles" %
-          (cut["split_cells"], cut["cut_points"], cut["cells"]) in out.splitlines(),
-          "stdout lacks the cut line")
+    check("smooth: %d moved points, %d rejected moves; a surface of %d triangles" %
+          (smooth["moved_points"], smooth["rejected_moves"], smooth["cells"]) in out.splitlines(),
+          "stdout lacks the smooth line")
     check_closed_and_oriented(surface, "surface.vtp")
-    # Oriented outward, it encloses exactly the inside of the volume output.
+    # Oriented outward, it encloses exactly the inside of the (smoothed) volume output: the
+    # surface is the smoothed interface, not a new cut.
+    check(smooth["moved_points"] > 0, "smoothing moved no point")
     enclosed, inside = enclosed_volume(surface), material_volumes(volume)[1]
     check(close(enclosed, inside), "the surface encloses %r, the volume output's inside "
           "measures %r" % (enclosed, inside))
+    # Without smoothing the cut writes the surface itself, as before the smooth stage existed.
+    unsmoothed, unsmoothed_summary = c.path("unsmoothed.vtp"), c.path("unsmoothed.json")
+    out, _ = c.run_ok([image, "-o", unsmoothed, "--summary", unsmoothed_summary,
+                       "--output-mode", "surface", "--stop-after", "cut"])
+    check_table(out, STAGES_CUT)
+    cut = stage(load_summary(unsmoothed_summary), "cut")
+    unsmoothed_surface = read_surface(unsmoothed)
+    check(cut["cells"] == len(unsmoothed_surface["cells"]) and "inside_cells" not in cut,
+          "bad cut figures %s" % cut)
+    check("cut: %d split cells, %d cut points; a surface of %d triangles" %
+          (cut["split_cells"], cut["cut_points"], cut["cells"]) in out.splitlines(),
+          "stdout lacks the cut line")
+    check_closed_and_oriented(unsmoothed_surface, "unsmoothed.vtp")
+    # Smoothing moves points, never adds or removes facets.
+    check(len(unsmoothed_surface["cells"]) == len(surface["cells"]),
+          "the smoothed surface has %d triangles, the unsmoothed %d" %
+          (len(surface["cells"]), len(unsmoothed_surface["cells"])))
     # Legacy VTK polydata: the same surface.
     c.run_ok([image, "-o", c.path("surface.vtk"), "--output-mode", "surface"])
     legacy = read_surface(c.path("surface.vtk"))
@@ -1837,8 +1909,10 @@ def case_cut_two_dimensional(c):
     curve = read_surface(output)
     check(curve["types"] == {3}, "2D surface cell types %s, expected lines" % curve["types"])
     check_closed_and_oriented(curve, "flat_surface.vtp")
-    cut = stage(load_summary(summary_path), "cut")
-    check("a surface of %d lines" % cut["cells"] in out, "stdout does not count the lines")
+    # The smooth stage (default) takes the surface from the smoothed mesh.
+    smooth = stage(load_summary(summary_path), "smooth")
+    check(smooth["cells"] == len(curve["cells"]) and
+          "a surface of %d lines" % smooth["cells"] in out, "stdout does not count the lines")
     check("lines_per_original_material" in load_summary(summary_path),
           "no lines_per_original_material")
 
@@ -1883,9 +1957,251 @@ def case_cut_warnings(c):
     check(cut["inside_cells"] == 0, "a sphere outside the mesh has inside cells")
     check("stmesh: warning: the separating surface (--separating sphere:100,100,100,2) encloses "
           "no part of the mesh" in err, "no warning about an empty inside")
+    # The snap and smooth options without their stage.
+    for arguments, texts in [
+            (["--alpha", "0.2", "--snap", "quality", "--smooth-iterations", "5",
+              "--smooth-method", "laplacian"] + STAIRCASE,
+             ["--alpha applies to the snap stage only; ignored with --separating none",
+              "--snap applies to the snap stage only; ignored with --separating none",
+              "--smooth-iterations applies to the smooth stage only; ignored with "
+              "--separating none",
+              "--smooth-method applies to the smooth stage only; ignored with "
+              "--separating none"]),
+            (["--alpha", "0.2", "--stop-after", "tessellate"],
+             ["--alpha applies to the snap stage only; ignored with --stop-after tessellate"]),
+            (["--smooth-method", "laplacian", "--stop-after", "cut"],
+             ["--smooth-method applies to the smooth stage only; ignored with --stop-after cut"]),
+            (["--alpha", "0.2", "--snap", "none"], ["--alpha is ignored with --snap none"]),
+            (["--alpha", "0.2", "--snap", "quality"],
+             ["--alpha is ignored with --snap quality"]),
+            (["--smooth-method", "laplacian", "--smooth-iterations", "0"],
+             ["--smooth-method is ignored with --smooth-iterations 0"])]:
+        _, err = c.run_ok([image, "-o", c.path("ignored_stage.vtu")] + arguments)
+        for text in texts:
+            check("stmesh: warning: " + text in err, "no warning %r" % text)
+        check(err.count("warning") == len(texts), "unexpected warnings in %r" % err)
     # Non-simplicial elements are fine when the run stops before the cut.
     c.run_ok([image, "-o", c.path("hybrid.vtu"), "--elements", "hybrid", "--stop-after",
               "tessellate"])
+
+
+# ------------------------------------------------------------------------------------------------
+# The snap stage (--alpha, --snap: stmVertexSnap before the cut) and the smooth stage
+# (--smooth-iterations, --smooth-method: stmBoundarySmooth after it).
+
+def case_snap_smooth_default(c):
+    image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    summary, tessellate, cut, mesh, out, _ = cut_run(c, image, "default", [])
+    snap, smooth = stage(summary, "snap"), stage(summary, "smooth")
+    check(not snap["skipped"] and not smooth["skipped"], "a stage was skipped by default")
+    params = summary["parameters"]
+    check((params["alpha"], params["snap"], params["smooth_iterations"],
+           params["smooth_method"]) == (1.0 / 3.0, "quality", 20, "taubin"),
+          "bad snap and smooth parameters %s" % params)
+    # The labels' function takes steps of 1/4 at the voxel corners, so cuts close to a point
+    # are common: the default (quality-driven) rule snaps points, and every snap removes at
+    # least the cut edge next to the point.
+    check(snap["snapped_points"] > 0, "the default snapped no point")
+    _, _, unsnapped_cut, _, _, _ = cut_run(c, image, "unsnapped", ["--snap", "none"])
+    check(cut["cut_points"] < unsnapped_cut["cut_points"],
+          "snapping %d points left %d cut edges, without snapping %d" %
+          (snap["snapped_points"], cut["cut_points"], unsnapped_cut["cut_points"]))
+    # Smoothing moves points and keeps the cells: the smooth stage has the cut's cells and
+    # points, and "SmoothingDisplacement" and "Snapped" arrive in the output.
+    check(smooth["moved_points"] > 0, "smoothing moved no point")
+    check(smooth["cells"] == cut["cells"] and smooth["points"] == cut["points"],
+          "smoothing changed the mesh's size")
+    for array in ["Snapped", "SmoothingDisplacement", "SeparatingFunction"]:
+        check(array in mesh["point_arrays"], "no point array %s in %s" %
+              (array, mesh["point_arrays"]))
+    # The seconds of every stage, like the others.
+    for entry in (snap, smooth):
+        check(entry["seconds"] >= 0 and entry["peak_rss_mib"] > 0, "bad stage %s" % entry)
+
+
+def case_snap_alpha_zero_and_none(c):
+    image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    # Alpha 0 runs the snap stage and snaps nothing: the cut is the cut without a snap stage.
+    summary, _, cut, mesh, _, _ = cut_run(c, image, "alpha0", ["--alpha", "0",
+                                                              "--stop-after", "cut"])
+    snap = stage(summary, "snap")
+    check(summary["parameters"]["alpha"] == 0, "bad alpha %s" % summary["parameters"]["alpha"])
+    # --alpha alone selects the threshold rule, whose parameter it is.
+    check(summary["parameters"]["snap"] == "threshold",
+          "--alpha 0 snapped by rule %s" % summary["parameters"]["snap"])
+    check(not snap["skipped"] and snap["snapped_points"] == 0 and snap["refused_snaps"] == 0,
+          "--alpha 0: snap figures %s" % snap)
+    summary, _, none_cut, none_mesh, out, _ = cut_run(c, image, "none",
+                                                      ["--snap", "none", "--stop-after", "cut"])
+    snap = stage(summary, "snap")
+    check(snap["skipped"] and "snapped_points" not in snap, "--snap none: snap stage %s" % snap)
+    check(summary["parameters"]["snap"] == "none", "bad snap parameter")
+    check("skipped (--snap none)" in out, "the table does not say the snap was skipped")
+    check(cut["cut_points"] == none_cut["cut_points"] and cut["split_cells"] ==
+          none_cut["split_cells"], "--alpha 0 and --snap none cut differently")
+    without_arrays = lambda m: dict(m, point_arrays=None)
+    check(without_arrays(mesh) == without_arrays(none_mesh),
+          "--alpha 0 and --snap none give different meshes")
+    check("Snapped" in mesh["point_arrays"] and "Snapped" not in none_mesh["point_arrays"],
+          "point arrays %s and %s" % (mesh["point_arrays"], none_mesh["point_arrays"]))
+    # Alpha 0.5 snaps every cut edge's nearer end, so that nothing is left to cut.
+    summary, _, cut, _, _, _ = cut_run(c, image, "alpha05", ["--alpha", "0.5"])
+    check(stage(summary, "snap")["snapped_points"] > 0, "--alpha 0.5 snapped nothing")
+    check(cut["cut_points"] < none_cut["cut_points"], "--alpha 0.5 cut %d edges, no snapping %d"
+          % (cut["cut_points"], none_cut["cut_points"]))
+
+
+def worst_condition(path):
+    """The largest Verdict condition number of the cells of a mesh file (vtkMeshQuality)."""
+    try:
+        from vtkmodules.vtkFiltersVerdict import vtkMeshQuality
+    except ImportError as error:
+        raise CaseFailed("cannot import vtkMeshQuality (%s)" % error)
+    _, grid, errors = read_grid(path)
+    quality = watched(vtkMeshQuality(), errors)
+    quality.SetInputData(grid)
+    quality.SetTetQualityMeasureToCondition()
+    quality.SetTriangleQualityMeasureToCondition()
+    quality.Update()
+    check(not errors, "vtkMeshQuality failed on %s" % path)
+    return quality.GetOutput().GetCellData().GetArray("Quality").GetRange()[1]
+
+
+def case_snap_quality(c):
+    image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    summary, _, _, mesh, _, _ = cut_run(c, image, "quality", ["--snap", "quality"])
+    check(summary["parameters"]["snap"] == "quality", "bad snap parameter")
+    check(stage(summary, "snap")["snapped_points"] > 0, "--snap quality snapped nothing")
+    total = sum(mesh["measures"])
+    staircase = staircase_volume(c, image, "staircase", 1)
+    check(close(total, staircase), "the mesh measures %r, the staircase mesh with one layer %r"
+          % (total, staircase))
+    # The quality-driven rule snaps only where the cut's elements get no worse: the worst
+    # element of its cut is no worse than without snapping.
+    worst = {}
+    for rule in ["quality", "none"]:
+        output = c.path("cut_%s.vtu" % rule)
+        c.run_ok([image, "-o", output, "--snap", rule, "--stop-after", "cut"])
+        worst[rule] = worst_condition(output)
+    check(worst["quality"] <= worst["none"] * (1 + 1e-9),
+          "--snap quality: worst condition number %r, without snapping %r" %
+          (worst["quality"], worst["none"]))
+    # The analytic sphere: points move along its gradient onto it.
+    big, _ = write_label_image(c, "big_ball.vti", (25, 25, 25), big_ball)
+    for rule in ["threshold", "quality"]:
+        summary, _, _, sphere, _, _ = cut_run(
+            c, big, "sphere_" + rule, ["--separating", "sphere:12,12,12,6.5", "--snap", rule,
+                                       "--max-cell-size", "2"])
+        check(stage(summary, "snap")["snapped_points"] > 0, "%s: nothing snapped" % rule)
+        inside, analytic = material_volumes(sphere)[1], ball_volume(6.5)
+        check(0.97 * analytic < inside <= analytic * (1 + 1e-9),
+              "%s: the inside measures %r, the ball %r" % (rule, inside, analytic))
+
+
+def case_smooth_iterations(c):
+    image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    # No smoothing is the cut as it is: --smooth-iterations 0 writes what --stop-after cut does.
+    summary, _, _, zero, out, _ = cut_run(c, image, "zero", ["--smooth-iterations", "0"])
+    smooth = stage(summary, "smooth")
+    check(smooth["skipped"] and "moved_points" not in smooth, "smooth stage %s" % smooth)
+    check("skipped (--smooth-iterations 0)" in out, "the table does not say it was skipped")
+    _, _, _, cut, _, _ = cut_run(c, image, "cut", ["--stop-after", "cut"])
+    check(zero == cut, "--smooth-iterations 0 differs from --stop-after cut")
+    for keep in ["inside", "outside"]:
+        _, _, _, zero_side, _, _ = cut_run(c, image, "zero_" + keep,
+                                           ["--smooth-iterations", "0", "--keep", keep])
+        _, _, _, cut_side, _, _ = cut_run(c, image, "cut_" + keep,
+                                          ["--stop-after", "cut", "--keep", keep])
+        check(zero_side == cut_side, "--keep %s: --smooth-iterations 0 differs from "
+              "--stop-after cut" % keep)
+    # Smoothing keeps the cells and the domain (points on the mesh boundary stay), moves the
+    # inside's volume a little, and Laplacian differs from Taubin.
+    volumes = {}
+    for method in ["taubin", "laplacian"]:
+        summary, _, _, mesh, _, _ = cut_run(c, image, method, ["--smooth-method", method,
+                                                               "--smooth-iterations", "20"])
+        check(summary["parameters"]["smooth_method"] == method, "bad smooth_method")
+        check(mesh["cells"] == cut["cells"] and mesh["materials"] == cut["materials"],
+              "%s: smoothing changed the cells" % method)
+        check(close(sum(mesh["measures"]), sum(cut["measures"])),
+              "%s: the domain measures %r, before smoothing %r" %
+              (method, sum(mesh["measures"]), sum(cut["measures"])))
+        volumes[method] = material_volumes(mesh)[1]
+    # Taubin's lambda|mu steps keep the ball's volume; Laplacian smoothing shrinks it (the
+    # paper's section 3.4), strongly on a ball of only 5 voxels' radius.
+    before = material_volumes(cut)[1]
+    check(abs(volumes["taubin"] / before - 1) < 0.05 and volumes["laplacian"] < 0.95 * before,
+          "the inside measures %r with Taubin, %r with Laplacian, %r before smoothing" %
+          (volumes["taubin"], volumes["laplacian"], before))
+    # One side after smoothing is that side of the smoothed mesh of both sides.
+    _, _, _, both, _, _ = cut_run(c, image, "both", [])
+    _, _, _, inside, _, _ = cut_run(c, image, "inside", ["--keep", "inside"])
+    _, _, _, outside, _, _ = cut_run(c, image, "outside", ["--keep", "outside"])
+    check(inside["cells"] + outside["cells"] == both["cells"] and
+          sorted(inside["measures"] + outside["measures"]) == sorted(both["measures"]),
+          "the smoothed sides are not the smoothed mesh's")
+
+
+def case_stop_after_snap_and_smooth(c):
+    image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    output, summary_path = c.path("snapped.vtu"), c.path("snapped.json")
+    out, _ = c.run_ok([image, "-o", output, "--summary", summary_path, "--stop-after", "snap"])
+    check_table(out, ["read", "spacetree", "balance", "tessellate", "snap", "write"])
+    summary = load_summary(summary_path)
+    check(summary["parameters"]["stop_after"] == "snap", "bad stop_after")
+    snap, tessellate = stage(summary, "snap"), stage(summary, "tessellate")
+    snapped = read_cut(output)
+    check(snapped["cells"] == snap["cells"] == tessellate["cells"] and
+          snapped["points"] == snap["points"] == tessellate["points"],
+          "the snapped mesh has %d cells and %d points, the tessellation %d and %d" %
+          (snapped["cells"], snapped["points"], tessellate["cells"], tessellate["points"]))
+    check("Snapped" in snapped["point_arrays"], "no point array Snapped")
+    check(snap["snapped_points"] > 0, "nothing snapped")
+    # Snapping moves points inside the domain: its volume stays.
+    check(close(sum(snapped["measures"]), staircase_volume(c, image, "staircase", 1)),
+          "snapping changed the domain")
+    # --stop-after smooth is the default.
+    _, _, _, explicit, _, _ = cut_run(c, image, "explicit", ["--stop-after", "smooth"])
+    _, _, _, default, _, _ = cut_run(c, image, "default", [])
+    check(explicit == default, "--stop-after smooth differs from the default")
+    # --stop-after snap with --snap none writes the tessellation.
+    output = c.path("unsnapped.vtu")
+    out, _ = c.run_ok([image, "-o", output, "--stop-after", "snap", "--snap", "none"])
+    check("skipped (--snap none)" in out, "the table does not say the snap was skipped")
+    tessellation = c.path("tessellation.vtu")
+    c.run_ok([image, "-o", tessellation, "--stop-after", "tessellate"])
+    check(read_cut(output) == read_cut(tessellation), "--stop-after snap --snap none is not the "
+          "tessellation")
+
+
+def case_error_snap_smooth_option_values(c):
+    image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    output = c.path("out.vtu")
+    for arguments, text in [
+            (["--alpha", "0.6"], "--alpha: A must be between 0 and 0.5, got 0.6"),
+            (["--alpha", "-0.1"], "--alpha: A must be between 0 and 0.5, got -0.1"),
+            (["--alpha", "abc"], "--alpha: 'abc' is not a number"),
+            (["--alpha", ""], "--alpha needs a number"),
+            (["--alpha", "nan"], "--alpha: 'nan' is not a number"),
+            (["--snap", "edge"], "--snap: 'edge' is not one of threshold, quality, none"),
+            (["--snap", "Quality"], "--snap: 'Quality' is not one of threshold, quality, none"),
+            (["--smooth-iterations", "-1"],
+             "--smooth-iterations: -1 is out of range (0 to 1000)"),
+            (["--smooth-iterations", "2.5"], "--smooth-iterations: '2.5' is not an integer"),
+            (["--smooth-iterations", "1001"],
+             "--smooth-iterations: 1001 is out of range (0 to 1000)"),
+            (["--smooth-method", "gauss"], "--smooth-method: 'gauss' is not one of taubin, "
+             "laplacian"),
+            (["--alpha", "0.1", "--alpha", "0.2"], "--alpha given more than once"),
+            (["--stop-after", "snap", "--separating", "none"],
+             "--stop-after snap needs a separating function, but --separating is none"),
+            (["--stop-after", "smooth", "--separating", "none"],
+             "--stop-after smooth needs a separating function, but --separating is none")]:
+        err = c.run_failing([image, "-o", output] + arguments, 2, text, output=output)
+        error_lines = [line for line in err.splitlines() if line.startswith(ERROR_PREFIX)]
+        check(len(error_lines) == 1 and error_lines[0].startswith(ERROR_PREFIX + " " + text),
+              "expected one error line starting with %r, got %s" % (text, error_lines))
+        check("--help" in err, "usage errors should point to --help")
 
 
 def case_error_cut_option_values(c):
@@ -1926,7 +2242,7 @@ def case_error_cut_option_values(c):
             (["--iso", "inf"], "--iso: 'inf' is not a number"),
             (["--iso", ""], "--iso needs a number"),
             (["--stop-after", "cutting"], "--stop-after: 'cutting' is not one of spacetree, "
-             "balance, tessellate, cut"),
+             "balance, tessellate, snap, cut, smooth"),
             (["--stop-after", "cut", "--separating", "none"],
              "--stop-after cut needs a separating function"),
             (["--elements", "hybrid"], "--elements hybrid: cutting at the separating function "

@@ -4,11 +4,13 @@
  *
  * Reads a segmented (label) image, runs stmImageToSpacetree, stmSpacetreeBalance and
  * stmSpacetreeTessellate (tetrahedra, a hybrid mesh or the leaf cells) and, unless --separating
- * none, cuts the tetrahedra at a separating function with stmMarchingSimplices (the function of
- * the labels, optionally smoothed, computed by stmSpacetreeTessellate, or one of
- * stmSeparatingFunction: a gray image against an iso-value, or a sphere). It writes the result
- * as a .vtu or legacy .vtk file (the cut's surface as .vtp or .vtk), printing a per-stage table
- * of wall time, output size and peak memory. Run `stmesh --help` for the usage.
+ * none, snaps points next to the separating surface onto it (stmVertexSnap), cuts the
+ * tetrahedra at the surface with stmMarchingSimplices and smooths the cut surface
+ * (stmBoundarySmooth). The separating function is the labels' (optionally smoothed, computed by
+ * stmSpacetreeTessellate) or one of stmSeparatingFunction: a gray image against an iso-value, or
+ * a sphere. It writes the result as a .vtu or legacy .vtk file (the surface as .vtp or .vtk),
+ * printing a per-stage table of wall time, output size and peak memory. Run `stmesh --help` for
+ * the usage.
  *
  * Error policy: every failure (bad command line, unreadable or corrupt input, filter error,
  * write error) ends with messages on stderr that start with "stmesh: error:" and exit code 2 for
@@ -19,13 +21,17 @@
  * on success, so a failure never leaves a partial file under the requested name.
  */
 
+#include "Check/SimplexQuality.h"
+#include "stmBoundarySmooth.h"
 #include "stmImageToSpacetree.h"
 #include "stmMarchingSimplices.h"
 #include "stmSeparatingFunction.h"
 #include "stmSpacetreeBalance.h"
 #include "stmSpacetreeTessellate.h"
+#include "stmVertexSnap.h"
 
 #include "vtkAlgorithm.h"
+#include "vtkAlgorithmOutput.h"
 #include "vtkBox.h"
 #include "vtkCallbackCommand.h"
 #include "vtkCellArray.h"
@@ -53,9 +59,11 @@
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkPolyDataWriter.h"
+#include "vtkSMPThreadLocal.h"
 #include "vtkSMPTools.h"
 #include "vtkSmartPointer.h"
 #include "vtkSphere.h"
+#include "vtkTrivialProducer.h"
 #include "vtkType.h"
 #include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
@@ -73,6 +81,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -107,9 +116,13 @@ const int MaxMaxCellSize = 1 << 20; // stmImageToSpacetree clamps to this
 const int DefaultBalanceLevel = 1;
 const int MaxBalanceLevel = 20; // stmSpacetreeBalance clamps to this
 const int MaxThreads = 4096;
-const int MaxBoundaryLayers = 100; // stmSpacetreeTessellate clamps to this
-const int MaxSplitCount = 8;       // stmImageToSpacetree's largest split count per axis
-const double MinimumGrading = 1.5; // stmImageToSpacetree's smallest grading
+const int MaxBoundaryLayers = 100;      // stmSpacetreeTessellate clamps to this
+const int MaxSplitCount = 8;            // stmImageToSpacetree's largest split count per axis
+const double MinimumGrading = 1.5;      // stmImageToSpacetree's smallest grading
+const double DefaultAlpha = 1.0 / 3.0;  // the paper's choice (section 3.3, Table 2)
+const double MaxAlpha = 0.5;            // stmVertexSnap's range: 0.5 snaps every cut edge
+const int DefaultSmoothIterations = 20; // the paper's Fig. 10
+const int MaxSmoothIterations = 1000;   // stmBoundarySmooth clamps to this
 
 const char* const UsageText =
   R"(Usage: stmesh [INPUT] [-o OUTPUT] [--labels 1,2,5] [--max-cell-size N] [--balance L]
@@ -120,16 +133,19 @@ const char* const UsageText =
               [--cell-template checkerboard|kuhn] [--boundary-layer N]
               [--separating labels|smooth:SIGMA|gray:FILE:ISO|sphere:CX,CY,CZ,R|none]
               [--output-mode volume|surface] [--keep both|inside|outside] [--iso V]
-              [--stop-after spacetree|balance|tessellate|cut] [--threads N]
+              [--alpha A] [--snap threshold|quality|none]
+              [--smooth-iterations N] [--smooth-method taubin|laplacian]
+              [--stop-after spacetree|balance|tessellate|snap|cut|smooth] [--threads N]
               [--summary FILE.json] [--compressor lz4|zlib|none]
        stmesh -h|--help
        stmesh --version
 
 Mesh a segmented (label) image with SpacetreeMesh: build the spacetree of the labels, balance
-it, tessellate it into a conforming tetrahedral mesh and cut that mesh at a separating surface
-(by default the smooth boundary of the labels' voxels), with a cell array "Material". With
---separating none the mesh keeps the voxel staircase: tetrahedra, a hybrid mesh or the leaf
-cells, with the labels as "Material".
+it, tessellate it into a conforming tetrahedral mesh, snap the points next to a separating
+surface (by default the smooth boundary of the labels' voxels) onto it, cut the mesh at that
+surface and smooth the cut surface, with a cell array "Material". With --separating none the
+mesh keeps the voxel staircase: tetrahedra, a hybrid mesh or the leaf cells, with the labels as
+"Material".
 
 Arguments:
   INPUT                 label image: .nii, .nii.gz (NIfTI), .mha, .mhd (MetaImage), .nrrd, .nhdr
@@ -223,14 +239,35 @@ Arguments:
                         --output-mode, --keep and --iso apply to the cut stage only; they are
                         ignored, with a warning, with --separating none or an earlier
                         --stop-after.
-  --stop-after STAGE    write the output of spacetree, balance, tessellate or cut. Default: cut,
-                        or tessellate with --separating none.
+  --alpha A             the threshold snap rule (given alone, it selects that rule): move a
+                        point onto the separating surface, instead of cutting an edge next to
+                        it, when the surface crosses the edge within A times its length from
+                        the point; 0 to 0.5 (0.5 cuts no edge, 0 snaps nothing). Default 1/3
+                        (the paper's choice).
+  --snap R              the snap rule: quality (the default: snap the nearer end of a cut edge
+                        unless that makes worse elements than the cut), threshold (snap
+                        wherever --alpha says) or none (no snap stage).
+                        Points move along the cut edge with labels and smooth, along the
+                        function's gradient with gray and sphere.
+  --smooth-iterations N iterations of the smooth stage, which smooths the cut surface (and the
+                        interfaces between materials) and relaxes the cells next to it, 0 to
+                        1000; 0 skips it. Default 20.
+  --smooth-method M     taubin (the default: smoothing without shrinking) or laplacian.
+                        --alpha, --snap, --smooth-iterations and --smooth-method need a
+                        separating function; they are ignored, with a warning, with --separating
+                        none or a --stop-after before their stage.
+  --stop-after STAGE    write the output of spacetree, balance, tessellate, snap, cut or smooth.
+                        Default: smooth, or tessellate with --separating none. With smoothing,
+                        the cut keeps both sides, and --keep and --output-mode surface act
+                        after the smoothing, on the smoothed mesh.
   --threads N           number of threads, 1 to 4096. Default: all cores, or VTK_SMP_MAX_THREADS.
                         The STDThread backend is used unless VTK_SMP_BACKEND_IN_USE is set.
   --summary FILE.json   also write the per-stage figures (for tessellate also the inserted
                         points, the cells per type, the boundary layers and, for hybrid and
-                        leaves output, the volume fraction of the hexahedra; for cut the split
-                        cells, the cut points and the inside and outside cells), the
+                        leaves output, the volume fraction of the hexahedra; for snap the
+                        snapped points and the refused snaps; for cut the split cells, the cut
+                        points and the inside and outside cells; for smooth the moved points
+                        and the rejected moves), the
                         spacetree's cell size per level (in voxels) and the per-material counts
                         as JSON.
   --compressor C        compression of .vtu and .vtp files: lz4 (the default, fastest), zlib
@@ -402,12 +439,15 @@ bool FindMeshFormat(const std::string& path, MeshFormat& format)
 //------------------------------------------------------------------------------------------------
 // Command line.
 
+/// The stages in pipeline order (compared with < and >=).
 enum class StopStage
 {
   Spacetree,
   Balance,
   Tessellate,
-  Cut
+  Snap,
+  Cut,
+  Smooth
 };
 
 const char* StopStageName(StopStage stage)
@@ -420,8 +460,12 @@ const char* StopStageName(StopStage stage)
       return "balance";
     case StopStage::Tessellate:
       return "tessellate";
+    case StopStage::Snap:
+      return "snap";
     case StopStage::Cut:
       return "cut";
+    case StopStage::Smooth:
+      return "smooth";
   }
   return "?";
 }
@@ -445,6 +489,12 @@ const NamedValue OutputModes[] = { { "volume", stmMarchingSimplices::VOLUME },
   { "surface", stmMarchingSimplices::SURFACE } };
 const NamedValue KeptSides[] = { { "both", stmMarchingSimplices::BOTH },
   { "inside", stmMarchingSimplices::INSIDE }, { "outside", stmMarchingSimplices::OUTSIDE } };
+/// --snap none has no filter constant: it drops the snap stage.
+const int NoSnap = -1;
+const NamedValue SnapRules[] = { { "threshold", stmVertexSnap::THRESHOLD },
+  { "quality", stmVertexSnap::QUALITY_DRIVEN }, { "none", NoSnap } };
+const NamedValue SmoothMethods[] = { { "taubin", stmBoundarySmooth::TAUBIN },
+  { "laplacian", stmBoundarySmooth::LAPLACIAN } };
 
 /// The value of a keyword option (--elements, --templates, --cell-template), by its name.
 template <std::size_t N>
@@ -533,16 +583,29 @@ struct Options
   std::string SizingArray;
   std::vector<std::pair<int, int>> LabelBalanceLevels;
   RegionOption BalanceRegion;
-  SeparatingOption Separating;                   // --separating
-  int OutputMode = stmMarchingSimplices::VOLUME; // --output-mode
-  int KeepSide = stmMarchingSimplices::BOTH;     // --keep
-  double IsoValue = 0.0;                         // --iso
-  std::vector<std::string> CutOnlyOptions;       // --output-mode, --keep, --iso if given
+  SeparatingOption Separating;                    // --separating
+  int OutputMode = stmMarchingSimplices::VOLUME;  // --output-mode
+  int KeepSide = stmMarchingSimplices::BOTH;      // --keep
+  double IsoValue = 0.0;                          // --iso
+  std::vector<std::string> CutOnlyOptions;        // --output-mode, --keep, --iso if given
+  double Alpha = DefaultAlpha;                    // --alpha
+  int SnapRule = stmVertexSnap::QUALITY_DRIVEN;   // --snap; NoSnap for none
+  bool SnapRuleGiven = false;                     // --snap given (else --alpha means threshold)
+  std::vector<std::string> SnapOnlyOptions;       // --alpha, --snap if given
+  int SmoothIterations = DefaultSmoothIterations; // --smooth-iterations
+  int SmoothMethod = stmBoundarySmooth::TAUBIN;   // --smooth-method
+  std::vector<std::string> SmoothOnlyOptions;     // --smooth-iterations, --smooth-method if given
   bool SeparatingGiven = false;
   bool StopAfterGiven = false;
 
-  /// Whether the cut stage runs, and whether it writes the surface (a vtkPolyData).
-  bool Cuts() const { return this->StopAfter == StopStage::Cut; }
+  /// Whether the run reaches the snap stage (it may still skip it: --snap none), the cut stage
+  /// and the smooth stage; whether the smooth stage does anything; whether the run writes the
+  /// surface (a vtkPolyData).
+  bool ReachesSnap() const { return this->StopAfter >= StopStage::Snap; }
+  bool Cuts() const { return this->StopAfter >= StopStage::Cut; }
+  bool ReachesSmooth() const { return this->StopAfter == StopStage::Smooth; }
+  bool Snaps() const { return this->ReachesSnap() && this->SnapRule != NoSnap; }
+  bool Smooths() const { return this->ReachesSmooth() && this->SmoothIterations > 0; }
   bool WritesSurface() const
   {
     return this->Cuts() && this->OutputMode == stmMarchingSimplices::SURFACE;
@@ -1035,7 +1098,8 @@ Options ParseCommandLine(int argc, char* argv[])
       "--balance", "--stop-after", "--threads", "--summary", "--compressor", "--pattern",
       "--root-cell-size", "--max-cell-size-label", "--refine-region", "--grading", "--sizing-array",
       "--balance-label", "--balance-region", "--elements", "--templates", "--cell-template",
-      "--boundary-layer", "--separating", "--output-mode", "--keep", "--iso" };
+      "--boundary-layer", "--separating", "--output-mode", "--keep", "--iso", "--alpha", "--snap",
+      "--smooth-iterations", "--smooth-method" };
     if (valueOptions.count(name) == 0)
     {
       throw UsageError("unknown option '" + name + "'");
@@ -1088,14 +1152,22 @@ Options ParseCommandLine(int argc, char* argv[])
       {
         options.StopAfter = StopStage::Tessellate;
       }
+      else if (value == "snap")
+      {
+        options.StopAfter = StopStage::Snap;
+      }
       else if (value == "cut")
       {
         options.StopAfter = StopStage::Cut;
       }
+      else if (value == "smooth")
+      {
+        options.StopAfter = StopStage::Smooth;
+      }
       else
       {
-        throw UsageError(
-          "--stop-after: '" + value + "' is not one of spacetree, balance, tessellate, cut");
+        throw UsageError("--stop-after: '" + value +
+          "' is not one of spacetree, balance, tessellate, snap, cut, smooth");
       }
     }
     else if (name == "--separating")
@@ -1117,6 +1189,32 @@ Options ParseCommandLine(int argc, char* argv[])
     {
       options.IsoValue = ParseReal(value, name);
       options.CutOnlyOptions.push_back(name);
+    }
+    else if (name == "--alpha")
+    {
+      options.Alpha = ParseReal(value, name);
+      if (!(options.Alpha >= 0 && options.Alpha <= MaxAlpha))
+      {
+        throw UsageError("--alpha: A must be between 0 and 0.5, got " + value);
+      }
+      options.SnapOnlyOptions.push_back(name);
+    }
+    else if (name == "--snap")
+    {
+      options.SnapRule = ParseKeyword(value, name, SnapRules);
+      options.SnapRuleGiven = true;
+      options.SnapOnlyOptions.push_back(name);
+    }
+    else if (name == "--smooth-iterations")
+    {
+      options.SmoothIterations =
+        static_cast<int>(ParseInteger(value, name, 0, MaxSmoothIterations));
+      options.SmoothOnlyOptions.push_back(name);
+    }
+    else if (name == "--smooth-method")
+    {
+      options.SmoothMethod = ParseKeyword(value, name, SmoothMethods);
+      options.SmoothOnlyOptions.push_back(name);
     }
     else if (name == "--elements")
     {
@@ -1211,16 +1309,25 @@ Options ParseCommandLine(int argc, char* argv[])
       " needs balancing and cannot be combined with --balance 0");
   }
 
-  // The cut stage: the last one by default when there is a separating function.
+  // --alpha is the threshold rule's parameter: given without --snap, it asks for that rule.
+  if (!options.SnapRuleGiven &&
+    std::find(options.SnapOnlyOptions.begin(), options.SnapOnlyOptions.end(), "--alpha") !=
+      options.SnapOnlyOptions.end())
+  {
+    options.SnapRule = stmVertexSnap::THRESHOLD;
+  }
+
+  // The smooth stage: the last one by default when there is a separating function.
   const bool separates = options.Separating.Kind != SeparatingKind::None;
   if (!options.StopAfterGiven)
   {
-    options.StopAfter = separates ? StopStage::Cut : StopStage::Tessellate;
+    options.StopAfter = separates ? StopStage::Smooth : StopStage::Tessellate;
   }
-  else if (options.StopAfter == StopStage::Cut && !separates)
+  else if (options.StopAfter >= StopStage::Snap && !separates)
   {
-    throw UsageError("--stop-after cut needs a separating function, but --separating is none; "
-                     "give --stop-after tessellate or another --separating");
+    throw UsageError(std::string("--stop-after ") + StopStageName(options.StopAfter) +
+      " needs a separating function, but --separating is none; give --stop-after tessellate "
+      "or another --separating");
   }
   if (options.Cuts() && options.Elements != stmSpacetreeTessellate::SIMPLICIAL)
   {
@@ -1590,6 +1697,18 @@ struct StageReport
   long long CutPoints = -1;
   long long InsideCells = -1;
   long long OutsideCells = -1;
+  // The snap stage only (Snap true): the points moved onto the surface, and the snaps the
+  // filter refused (they would have flattened a cell).
+  bool Snap = false;
+  long long SnappedPoints = -1;
+  long long RefusedSnaps = -1;
+  // The smooth stage only (Smooth true): the points moved and the moves undone for the quality
+  // bounds; SurfaceCells the triangles (lines) of the surface it extracts for --output-mode
+  // surface, -1 for volume output.
+  bool Smooth = false;
+  long long MovedPoints = -1;
+  long long RejectedMoves = -1;
+  long long SurfaceCells = -1;
 };
 
 double PeakRssMiB()
@@ -2537,6 +2656,15 @@ void PrintTable(const std::vector<StageReport>& stages, double totalSeconds)
     }
     std::cout << '\n';
   }
+  // The snap's figures: snapped points and refused snaps.
+  for (const StageReport& stage : stages)
+  {
+    if (stage.Snap && !stage.Skipped)
+    {
+      std::cout << stage.Name << ": " << stage.SnappedPoints << " snapped points, "
+                << stage.RefusedSnaps << " refused snaps\n";
+    }
+  }
   // The cut's figures: split cells, cut points and the cells on each side.
   for (const StageReport& stage : stages)
   {
@@ -2554,6 +2682,22 @@ void PrintTable(const std::vector<StageReport>& stages, double totalSeconds)
     else
     {
       std::cout << "; a surface of " << stage.Cells << ' '
+                << (stage.TwoDimensional ? "lines" : "triangles");
+    }
+    std::cout << '\n';
+  }
+  // The smoothing's figures: moved points, rejected moves, and the surface taken from it.
+  for (const StageReport& stage : stages)
+  {
+    if (!stage.Smooth || stage.Skipped)
+    {
+      continue;
+    }
+    std::cout << stage.Name << ": " << stage.MovedPoints << " moved points, " << stage.RejectedMoves
+              << " rejected moves";
+    if (stage.SurfaceCells >= 0)
+    {
+      std::cout << "; a surface of " << stage.SurfaceCells << ' '
                 << (stage.TwoDimensional ? "lines" : "triangles");
     }
     std::cout << '\n';
@@ -2616,6 +2760,14 @@ std::string JsonNumber(double value)
   return text;
 }
 
+/// The shortest text that reads back as the same double (1/3 is 0.3333333333333333).
+std::string JsonShortestNumber(double value)
+{
+  char text[64];
+  const std::to_chars_result result = std::to_chars(text, text + sizeof(text), value);
+  return std::string(text, result.ptr);
+}
+
 template <class Number>
 std::string JsonList(const std::vector<Number>& values)
 {
@@ -2652,8 +2804,102 @@ std::string JsonRegion(const RegionOption& region, bool balanceLevel)
     "}";
 }
 
+/// The element shapes and the volume per material of a simplicial output mesh, measured with
+/// the core's shape measures (Verdict's condition number, the true smallest dihedral angle).
+struct MeshQuality
+{
+  bool Measured = false;
+  long long Cells = 0;
+  double WorstCondition = 0.0;
+  double SmallestDihedral = 180.0;
+  long long InvertedCells = 0;
+  std::map<long long, double> VolumePerMaterial;
+};
+
+/// Tetrahedra, or triangles of a 2D mesh in the z = const plane; nothing for other outputs.
+MeshQuality MeasureMeshQuality(vtkPointSet* mesh)
+{
+  MeshQuality quality;
+  auto* grid = vtkUnstructuredGrid::SafeDownCast(mesh);
+  if (!grid || grid->GetNumberOfCells() == 0)
+  {
+    return quality;
+  }
+  vtkCellArray* cells = grid->GetCells();
+  const vtkIdType numberOfCells = grid->GetNumberOfCells();
+  const int corners = cells->IsHomogeneous();
+  const int firstType = grid->GetCellType(0);
+  if (!((corners == 4 && firstType == VTK_TETRA) || (corners == 3 && firstType == VTK_TRIANGLE)))
+  {
+    return quality;
+  }
+  vtkDataArray* materials = grid->GetCellData()->GetArray("Material");
+  struct Partial
+  {
+    double Worst = 0.0;
+    double Smallest = 180.0;
+    long long Inverted = 0;
+    std::map<long long, double> Volumes;
+  };
+  vtkSMPThreadLocal<Partial> partials;
+  vtkSMPTools::For(0, numberOfCells,
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      Partial& partial = partials.Local();
+      vtkNew<vtkIdList> ids;
+      double coordinates[4][3];
+      for (vtkIdType cell = begin; cell < end; ++cell)
+      {
+        cells->GetCellAtId(cell, ids);
+        for (int v = 0; v < corners; ++v)
+        {
+          grid->GetPoint(ids->GetId(v), coordinates[v]);
+        }
+        double measure = 0.0;
+        double condition = 0.0, dihedral = 0.0;
+        if (corners == 4)
+        {
+          const double* pointers[4] = { coordinates[0], coordinates[1], coordinates[2],
+            coordinates[3] };
+          const auto shape = stm::MeasureSimplex<3>(pointers);
+          measure = shape.Determinant / 6.0;
+          condition = shape.Condition;
+          dihedral = shape.MinDihedralDegrees;
+        }
+        else
+        {
+          const double* pointers[3] = { coordinates[0], coordinates[1], coordinates[2] };
+          const auto shape = stm::MeasureSimplex<2>(pointers);
+          measure = shape.Determinant / 2.0;
+          condition = shape.Condition;
+          dihedral = shape.MinDihedralDegrees;
+        }
+        partial.Inverted += measure > 0.0 ? 0 : 1;
+        partial.Worst = std::max(partial.Worst, condition);
+        partial.Smallest = std::min(partial.Smallest, dihedral);
+        const long long material =
+          materials ? static_cast<long long>(materials->GetComponent(cell, 0)) : 0;
+        partial.Volumes[material] += measure;
+      }
+    });
+  quality.Measured = true;
+  quality.Cells = numberOfCells;
+  for (const Partial& partial : partials)
+  {
+    quality.WorstCondition = std::max(quality.WorstCondition, partial.Worst);
+    quality.SmallestDihedral = std::min(quality.SmallestDihedral, partial.Smallest);
+    quality.InvertedCells += partial.Inverted;
+    for (const auto& entry : partial.Volumes)
+    {
+      quality.VolumePerMaterial[entry.first] += entry.second;
+    }
+  }
+  return quality;
+}
+
 struct RunSummary
 {
+  MeshQuality Quality;
   std::string Input;
   std::string Output;
   bool DefaultInput = false;
@@ -2708,7 +2954,12 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
        << ", \"separating\": " << JsonString(options.Separating.Text)
        << ", \"output_mode\": " << JsonString(KeywordName(options.OutputMode, OutputModes))
        << ", \"keep\": " << JsonString(KeywordName(options.KeepSide, KeptSides))
-       << ", \"iso\": " << JsonNumber(options.IsoValue) << "},\n";
+       << ", \"iso\": " << JsonNumber(options.IsoValue)
+       << ", \"alpha\": " << JsonShortestNumber(options.Alpha)
+       << ", \"snap\": " << JsonString(KeywordName(options.SnapRule, SnapRules))
+       << ", \"smooth_iterations\": " << options.SmoothIterations
+       << ", \"smooth_method\": " << JsonString(KeywordName(options.SmoothMethod, SmoothMethods))
+       << "},\n";
   json << "  \"threads\": " << summary.Threads.Threads << ",\n";
   json << "  \"smp_backend\": " << JsonString(summary.Threads.Backend) << ",\n";
   // The spacetree's levels: cell edges in voxels per level, root first, along the image axes the
@@ -2775,9 +3026,41 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
              << ", \"outside_cells\": " << stage.OutsideCells;
       }
     }
+    if (stage.Snap)
+    {
+      json << ", \"snapped_points\": " << JsonCount(stage.SnappedPoints)
+           << ", \"refused_snaps\": " << JsonCount(stage.RefusedSnaps);
+    }
+    if (stage.Smooth)
+    {
+      json << ", \"moved_points\": " << JsonCount(stage.MovedPoints)
+           << ", \"rejected_moves\": " << JsonCount(stage.RejectedMoves);
+      if (stage.SurfaceCells >= 0)
+      {
+        json << ", \"surface_cells\": " << stage.SurfaceCells;
+      }
+    }
     json << "}" << (i + 1 < summary.Stages.size() ? "," : "") << "\n";
   }
   json << "  ],\n";
+  if (summary.Quality.Measured)
+  {
+    // An inverted cell has an infinite condition number, which JSON cannot hold.
+    const double worst = summary.Quality.WorstCondition;
+    json << "  \"quality\": {\"worst_condition\": "
+         << (std::isfinite(worst) ? JsonNumber(worst) : std::string("null"))
+         << ", \"smallest_dihedral_degrees\": " << JsonNumber(summary.Quality.SmallestDihedral)
+         << ", \"inverted_cells\": " << summary.Quality.InvertedCells
+         << ", \"volume_per_material\": {";
+    const char* separator = "";
+    for (const auto& entry : summary.Quality.VolumePerMaterial)
+    {
+      json << separator << JsonString(std::to_string(entry.first)) << ": "
+           << JsonNumber(entry.second);
+      separator = ", ";
+    }
+    json << "}},\n";
+  }
   json << "  \"total_seconds\": " << std::setprecision(6) << summary.TotalSeconds << ",\n";
   json << "  \"peak_rss_mib\": " << std::setprecision(3) << PeakRssMiB() << ",\n";
   json << "  " << JsonString(summary.MaterialKey) << ": {";
@@ -2824,7 +3107,8 @@ void WarnAboutIgnoredCutOptions(const Options& options)
   // The labels' functions go into the tessellation; the gray image and the sphere only into
   // the cut.
   const SeparatingKind kind = options.Separating.Kind;
-  if (options.SeparatingGiven && kind != SeparatingKind::None &&
+  const bool separates = kind != SeparatingKind::None;
+  if (options.SeparatingGiven && separates &&
     (options.StopAfter == StopStage::Spacetree || options.StopAfter == StopStage::Balance ||
       (options.StopAfter == StopStage::Tessellate &&
         (kind == SeparatingKind::Gray || kind == SeparatingKind::Sphere))))
@@ -2836,20 +3120,48 @@ void WarnAboutIgnoredCutOptions(const Options& options)
                          : "")
                   << '\n';
   }
+  const std::string ignoredWith = separates
+    ? "with --stop-after " + std::string(StopStageName(options.StopAfter))
+    : std::string("with --separating none");
   for (const std::string& name : options.CutOnlyOptions)
   {
-    if (!options.Cuts())
+    // The snap stage also moves points onto f = iso.
+    const bool used = options.Cuts() || (name == "--iso" && options.Snaps());
+    if (!used)
     {
       Diagnostics() << "stmesh: warning: " << name << " applies to the cut stage only; ignored "
-                    << (options.Separating.Kind == SeparatingKind::None
-                           ? std::string("with --separating none")
-                           : "with --stop-after " + std::string(StopStageName(options.StopAfter)))
-                    << '\n';
+                    << ignoredWith << '\n';
     }
     else if (name == "--keep" && options.WritesSurface())
     {
       Diagnostics() << "stmesh: warning: --keep applies to volume output only; ignored with "
                        "--output-mode surface\n";
+    }
+  }
+  for (const std::string& name : options.SnapOnlyOptions)
+  {
+    if (!options.ReachesSnap())
+    {
+      Diagnostics() << "stmesh: warning: " << name << " applies to the snap stage only; ignored "
+                    << ignoredWith << '\n';
+    }
+    else if (name == "--alpha" && options.SnapRule != stmVertexSnap::THRESHOLD)
+    {
+      // The quality-driven rule weighs every cut edge's nearer end by the elements it makes.
+      Diagnostics() << "stmesh: warning: --alpha is ignored with --snap "
+                    << KeywordName(options.SnapRule, SnapRules) << '\n';
+    }
+  }
+  for (const std::string& name : options.SmoothOnlyOptions)
+  {
+    if (!options.ReachesSmooth())
+    {
+      Diagnostics() << "stmesh: warning: " << name << " applies to the smooth stage only; ignored "
+                    << ignoredWith << '\n';
+    }
+    else if (name == "--smooth-method" && options.SmoothIterations == 0)
+    {
+      Diagnostics() << "stmesh: warning: --smooth-method is ignored with --smooth-iterations 0\n";
     }
   }
 }
@@ -2860,48 +3172,125 @@ int InsideMaterial(const Options& options)
   return options.Labels.size() == 1 ? options.Labels[0] : 1;
 }
 
-/// The cut stage: the separating function of stmSeparatingFunction if --separating asks for one
-/// (the gray image is read here), then stmMarchingSimplices.
+/// What --separating gray and sphere give the snap stage besides the function values: the
+/// function whose gradient moves points onto the surface.
+struct SeparatingSource
+{
+  vtkSmartPointer<vtkSphere> Sphere;
+  vtkSmartPointer<vtkImageData> Gray;
+};
+
+/// stmSeparatingFunction for --separating gray and sphere (the gray image is read here); the
+/// labels' functions come with the tessellation, which is returned unchanged.
+vtkSmartPointer<vtkUnstructuredGrid> ApplySeparatingFunction(
+  vtkSmartPointer<vtkUnstructuredGrid> grid, const Options& options, SeparatingSource& source,
+  StageReport& report)
+{
+  const SeparatingOption& separating = options.Separating;
+  if (separating.Kind != SeparatingKind::Gray && separating.Kind != SeparatingKind::Sphere)
+  {
+    return grid;
+  }
+  vtkNew<stmSeparatingFunction> function;
+  if (separating.Kind == SeparatingKind::Sphere)
+  {
+    source.Sphere = vtkSmartPointer<vtkSphere>::New();
+    source.Sphere->SetCenter(separating.Sphere[0], separating.Sphere[1], separating.Sphere[2]);
+    source.Sphere->SetRadius(separating.Sphere[3]);
+    function->SetMode(stmSeparatingFunction::IMPLICIT_FUNCTION);
+    function->SetImplicitFunction(source.Sphere);
+  }
+  else
+  {
+    ImageInfo grayInfo;
+    StageReport grayReport;
+    source.Gray = ReadImage(separating.GrayImage, grayInfo, grayReport, false);
+    report.Seconds += grayReport.Seconds;
+    function->SetMode(stmSeparatingFunction::GRAY_IMAGE);
+    function->SetThreshold(separating.GrayIso);
+    function->SetInsideAboveThreshold(true);
+    function->SetInputDataObject(1, source.Gray);
+  }
+  vtkSmartPointer<vtkUnstructuredGrid> withFunction = vtkUnstructuredGrid::SafeDownCast(
+    RunFilter(function, grid, "computing the separating function", report));
+  if (!withFunction)
+  {
+    throw Failure("computing the separating function: the filter produced no mesh");
+  }
+  function->SetInputDataObject(1, nullptr);
+  return withFunction;
+}
+
+/// The snap stage (paper, section 3.3): stmVertexSnap moves the points next to the surface onto
+/// it, along the cut edge for the labels' functions (which are only known at the points) and
+/// along the gradient of the sphere or the gray image, which are known everywhere.
+vtkSmartPointer<vtkUnstructuredGrid> RunSnap(vtkSmartPointer<vtkUnstructuredGrid> grid,
+  const Options& options, const SeparatingSource& source, StageReport& report)
+{
+  vtkNew<stmVertexSnap> snap;
+  snap->SetAlpha(options.Alpha);
+  snap->SetSnapRule(options.SnapRule);
+  snap->SetIsoValue(options.IsoValue);
+  vtkNew<vtkTrivialProducer> grayProducer;
+  if (source.Sphere)
+  {
+    snap->SetProjection(stmVertexSnap::FUNCTION);
+    snap->SetImplicitFunction(source.Sphere);
+  }
+  else if (source.Gray)
+  {
+    grayProducer->SetOutput(source.Gray);
+    snap->SetProjection(stmVertexSnap::FUNCTION);
+    snap->SetGrayImageConnection(grayProducer->GetOutputPort());
+    snap->SetThreshold(options.Separating.GrayIso);
+    snap->SetInsideAboveThreshold(true); // as stmSeparatingFunction above
+  }
+  else
+  {
+    snap->SetProjection(stmVertexSnap::EDGE);
+  }
+  vtkSmartPointer<vtkUnstructuredGrid> snapped =
+    RunStage(snap, grid, "snapping points to the separating surface", report, false);
+  report.Snap = true;
+  report.SnappedPoints = static_cast<long long>(snap->GetNumberOfSnappedPoints());
+  report.RefusedSnaps = static_cast<long long>(snap->GetNumberOfRefusedSnaps());
+  return snapped;
+}
+
+/// The mesh's "Material" for a second stmMarchingSimplices run on an already cut mesh: the
+/// labels ("OriginalMaterial"), so that this run keeps them as its "OriginalMaterial". The
+/// all-zero cells, the only ones whose side comes from "Material", get the same side from the
+/// labels as in the first run, which read the same labels.
+vtkSmartPointer<vtkUnstructuredGrid> WithLabelsAsMaterial(vtkUnstructuredGrid* grid)
+{
+  vtkSmartPointer<vtkUnstructuredGrid> copy = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  copy->ShallowCopy(grid);
+  vtkDataArray* labels = grid->GetCellData()->GetArray("OriginalMaterial");
+  if (!labels)
+  {
+    return copy;
+  }
+  vtkSmartPointer<vtkDataArray> material =
+    vtkSmartPointer<vtkDataArray>::Take(labels->NewInstance());
+  material->ShallowCopy(labels);
+  material->SetName("Material");
+  copy->GetCellData()->RemoveArray("OriginalMaterial");
+  copy->GetCellData()->RemoveArray("Material");
+  copy->GetCellData()->AddArray(material);
+  return copy;
+}
+
+/// The cut stage: stmMarchingSimplices. With a smooth stage after it, the cut keeps both sides
+/// in volume mode, and the side (--keep) or the surface is taken after smoothing.
 vtkSmartPointer<vtkPointSet> RunCut(
   vtkSmartPointer<vtkUnstructuredGrid> grid, const Options& options, StageReport& report)
 {
-  const SeparatingOption& separating = options.Separating;
-  if (separating.Kind == SeparatingKind::Gray || separating.Kind == SeparatingKind::Sphere)
-  {
-    vtkNew<stmSeparatingFunction> function;
-    vtkNew<vtkSphere> sphere;
-    vtkSmartPointer<vtkImageData> gray;
-    if (separating.Kind == SeparatingKind::Sphere)
-    {
-      sphere->SetCenter(separating.Sphere[0], separating.Sphere[1], separating.Sphere[2]);
-      sphere->SetRadius(separating.Sphere[3]);
-      function->SetMode(stmSeparatingFunction::IMPLICIT_FUNCTION);
-      function->SetImplicitFunction(sphere);
-    }
-    else
-    {
-      ImageInfo grayInfo;
-      StageReport grayReport;
-      gray = ReadImage(separating.GrayImage, grayInfo, grayReport, false);
-      report.Seconds += grayReport.Seconds;
-      function->SetMode(stmSeparatingFunction::GRAY_IMAGE);
-      function->SetThreshold(separating.GrayIso);
-      function->SetInsideAboveThreshold(true);
-      function->SetInputDataObject(1, gray);
-    }
-    vtkSmartPointer<vtkUnstructuredGrid> withFunction = vtkUnstructuredGrid::SafeDownCast(
-      RunFilter(function, grid, "computing the separating function", report));
-    if (!withFunction)
-    {
-      throw Failure("computing the separating function: the filter produced no mesh");
-    }
-    function->SetInputDataObject(1, nullptr);
-    grid = withFunction;
-  }
-
+  const bool smoothingFollows = options.Smooths();
+  const int outputMode = smoothingFollows ? stmMarchingSimplices::VOLUME : options.OutputMode;
+  const int keepSide = smoothingFollows ? stmMarchingSimplices::BOTH : options.KeepSide;
   vtkNew<stmMarchingSimplices> cut;
-  cut->SetOutputMode(options.OutputMode);
-  cut->SetKeepSide(options.KeepSide);
+  cut->SetOutputMode(outputMode);
+  cut->SetKeepSide(keepSide);
   cut->SetIsoValue(options.IsoValue);
   cut->SetInsideMaterial(InsideMaterial(options));
   cut->SetOutsideMaterial(0); // the background label
@@ -2910,7 +3299,7 @@ vtkSmartPointer<vtkPointSet> RunCut(
   report.Cut = true;
   report.SplitCells = static_cast<long long>(cut->GetNumberOfSplitCells());
   report.CutPoints = static_cast<long long>(cut->GetNumberOfCutPoints());
-  if (!options.WritesSurface())
+  if (outputMode == stmMarchingSimplices::VOLUME)
   {
     report.InsideCells = 0;
     report.OutsideCells = 0;
@@ -2928,7 +3317,7 @@ vtkSmartPointer<vtkPointSet> RunCut(
   report.Description = description.str();
   // An empty side usually means a sphere or an iso-value that misses the body.
   std::string emptiness;
-  if (options.WritesSurface() && report.Cells == 0)
+  if (outputMode == stmMarchingSimplices::SURFACE && report.Cells == 0)
   {
     emptiness = "does not cross the mesh: the surface is empty";
   }
@@ -2942,9 +3331,62 @@ vtkSmartPointer<vtkPointSet> RunCut(
   }
   if (!emptiness.empty())
   {
-    Diagnostics() << "stmesh: warning: the separating surface (--separating " << separating.Text
-                  << (options.IsoValue != 0 ? ", --iso" : "") << ") " << emptiness << '\n';
+    Diagnostics() << "stmesh: warning: the separating surface (--separating "
+                  << options.Separating.Text << (options.IsoValue != 0 ? ", --iso" : "") << ") "
+                  << emptiness << '\n';
   }
+  return mesh;
+}
+
+/// The smooth stage (paper, section 3.4): stmBoundarySmooth on the cut mesh of both sides, then
+/// the side --keep asks for or the surface, by stmMarchingSimplices on the smoothed mesh. The
+/// cut points and the snapped points carry f = iso exactly, so that run splits nothing: its
+/// surface is the smoothed interface and its sides are the smoothed cut's cells. The sphere is
+/// known exactly, so the smoothed surface points go back onto it.
+vtkSmartPointer<vtkPointSet> RunSmooth(vtkSmartPointer<vtkUnstructuredGrid> grid,
+  const Options& options, const SeparatingSource& source, StageReport& report)
+{
+  vtkNew<stmBoundarySmooth> smooth;
+  smooth->SetNumberOfIterations(options.SmoothIterations);
+  smooth->SetMethod(options.SmoothMethod);
+  smooth->SetBackgroundMaterial(0); // the cut's outside
+  if (source.Sphere && options.IsoValue == 0)
+  {
+    // The sphere's zero set; with --iso the surface is another sphere, which vtkSphere is not.
+    smooth->SetProjectToFunction(true);
+    smooth->SetImplicitFunction(source.Sphere);
+  }
+  grid = RunStage(smooth, grid, "smoothing the surface", report, false);
+  report.Smooth = true;
+  report.MovedPoints = static_cast<long long>(smooth->GetNumberOfMovedPoints());
+  report.RejectedMoves = static_cast<long long>(smooth->GetNumberOfRejectedMoves());
+  if (!options.WritesSurface() && options.KeepSide == stmMarchingSimplices::BOTH)
+  {
+    return grid;
+  }
+  vtkNew<stmMarchingSimplices> extract;
+  extract->SetOutputMode(options.OutputMode);
+  extract->SetKeepSide(options.KeepSide);
+  extract->SetIsoValue(options.IsoValue);
+  extract->SetInsideMaterial(InsideMaterial(options));
+  extract->SetOutsideMaterial(0);
+  const std::string context = options.WritesSurface() ? "extracting the smoothed surface"
+                                                      : "keeping one side of the smoothed mesh";
+  vtkSmartPointer<vtkPointSet> mesh =
+    RunFilter(extract, WithLabelsAsMaterial(grid), context, report);
+  if (extract->GetNumberOfSplitCells() != 0)
+  {
+    throw Failure(context +
+      ": internal error: " + std::to_string(extract->GetNumberOfSplitCells()) +
+      " cells of the cut mesh were cut again (a cut or snapped point is off the surface)");
+  }
+  if (options.WritesSurface())
+  {
+    report.SurfaceCells = report.Cells;
+  }
+  std::ostringstream description;
+  description << report.Cells << " cells, " << report.Points << " points";
+  report.Description = description.str();
   return mesh;
 }
 
@@ -2977,7 +3419,7 @@ int Run(const Options& options)
       SupportedInputExtensions);
   }
   CheckReadableFile(input);
-  if (options.Cuts() && options.Separating.Kind == SeparatingKind::Gray)
+  if (options.ReachesSnap() && options.Separating.Kind == SeparatingKind::Gray)
   {
     CheckReadableFile(options.Separating.GrayImage, true);
   }
@@ -3046,7 +3488,7 @@ int Run(const Options& options)
   }
 
   bool twoDimensional = false;
-  if (options.StopAfter == StopStage::Tessellate || options.StopAfter == StopStage::Cut)
+  if (options.StopAfter >= StopStage::Tessellate)
   {
     StageReport tessellateReport;
     tessellateReport.Name = "tessellate";
@@ -3098,17 +3540,63 @@ int Run(const Options& options)
     summary.Stages.push_back(tessellateReport);
   }
 
+  // The gray image's or the sphere's function: computed as the snap stage begins (the snap
+  // needs it), its time counted in the first stage that runs after the tessellation.
+  SeparatingSource source;
+  double functionSeconds = 0.0;
+  if (options.ReachesSnap())
+  {
+    StageReport functionReport;
+    grid = ApplySeparatingFunction(std::move(grid), options, source, functionReport);
+    functionSeconds = functionReport.Seconds;
+
+    StageReport snapReport;
+    snapReport.Name = "snap";
+    if (!options.Snaps())
+    {
+      snapReport.Skipped = true;
+      snapReport.Description = "skipped (--snap none)";
+    }
+    else
+    {
+      snapReport.Seconds = functionSeconds;
+      functionSeconds = 0.0;
+      grid = RunSnap(std::move(grid), options, source, snapReport);
+    }
+    summary.Stages.push_back(snapReport);
+  }
+
   vtkSmartPointer<vtkPointSet> mesh = grid;
   grid = nullptr;
   if (options.Cuts())
   {
     StageReport cutReport;
     cutReport.Name = "cut";
+    cutReport.Seconds = functionSeconds;
     cutReport.TwoDimensional = twoDimensional;
     vtkSmartPointer<vtkUnstructuredGrid> tessellation = vtkUnstructuredGrid::SafeDownCast(mesh);
     mesh = nullptr; // RunCut frees the tessellation once it is cut
     mesh = RunCut(std::move(tessellation), options, cutReport);
     summary.Stages.push_back(cutReport);
+  }
+
+  if (options.ReachesSmooth())
+  {
+    StageReport smoothReport;
+    smoothReport.Name = "smooth";
+    smoothReport.TwoDimensional = twoDimensional;
+    if (!options.Smooths())
+    {
+      smoothReport.Skipped = true;
+      smoothReport.Description = "skipped (--smooth-iterations 0)";
+    }
+    else
+    {
+      vtkSmartPointer<vtkUnstructuredGrid> cutMesh = vtkUnstructuredGrid::SafeDownCast(mesh);
+      mesh = nullptr;
+      mesh = RunSmooth(std::move(cutMesh), options, source, smoothReport);
+    }
+    summary.Stages.push_back(smoothReport);
   }
 
   StageReport writeReport;
@@ -3121,6 +3609,21 @@ int Run(const Options& options)
   summary.CellsPerMaterial = CountCellsPerMaterial(mesh);
 
   PrintTable(summary.Stages, summary.TotalSeconds);
+  // Measured after the timing: it is a report on the output, not a stage of the meshing.
+  summary.Quality = MeasureMeshQuality(mesh);
+  if (summary.Quality.Measured)
+  {
+    std::cout << "quality: worst condition number " << std::fixed << std::setprecision(3)
+              << summary.Quality.WorstCondition << ", smallest "
+              << (twoDimensional ? "angle " : "dihedral angle ") << std::setprecision(2)
+              << summary.Quality.SmallestDihedral << " degrees, " << summary.Quality.InvertedCells
+              << " inverted cells; " << (twoDimensional ? "area" : "volume") << " per material";
+    for (const auto& entry : summary.Quality.VolumePerMaterial)
+    {
+      std::cout << ' ' << entry.first << ": " << std::setprecision(1) << entry.second;
+    }
+    std::cout << std::defaultfloat << '\n';
+  }
   if (!options.SummaryPath.empty())
   {
     WriteSummary(options.SummaryPath, options, summary);

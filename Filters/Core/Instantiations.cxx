@@ -7,6 +7,8 @@
 #include "Check/MeshInvariants.h"
 #include "Cut/MarchingSimplices.h"
 #include "Cut/SeparatingFunction.h"
+#include "Cut/VertexSnap.h"
+#include "Smooth/BoundarySmooth.h"
 #include "Spacetree/SpacetreeBuild.h"
 #include "Tessellate/SpacetreeTessellation.h"
 
@@ -50,6 +52,16 @@ void InstantiatePipeline()
     nullptr, nullptr, executor);
   std::vector<std::int64_t> facets, parents;
   cutter.ExtractSurface(static_cast<const std::int64_t*>(nullptr), facets, parents, executor);
+  VertexSnap<Dim> snap;
+  snap.Snap(static_cast<double*>(nullptr), nullptr, 0, static_cast<const std::int64_t*>(nullptr), 0,
+    VertexSnapOptions(), executor);
+  snap.Snap(
+    static_cast<double*>(nullptr), nullptr, 0, static_cast<const std::int32_t*>(nullptr), 0,
+    VertexSnapOptions(), [](std::int64_t, const double*, const double*, double*) { return true; },
+    executor);
+  BoundarySmoother<Dim>().Smooth(static_cast<double*>(nullptr), 0,
+    static_cast<const std::int64_t*>(nullptr), 0, static_cast<const std::int64_t*>(nullptr),
+    BoundarySmoothOptions(), executor);
 }
 } // namespace
 

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "stmMarchingSimplices.h"
 
+#include "stmCutInput.h"
 #include "stmFunctionValues.h"
 #include "stmSMPExecutor.h"
 
@@ -400,29 +401,6 @@ stm::Status Cut(CutRequest& request, const IdType* connectivity, vtkDataObject* 
   return CutVolume<Dim>(
     request, cutter, connectivity, vtkUnstructuredGrid::SafeDownCast(output), executor);
 }
-
-/// The dimension of a mesh of only tetrahedra (3) or only triangles (2); 0 otherwise, with the
-/// offending cell type.
-int SimplexDimension(vtkUnstructuredGrid* input, int& offendingType)
-{
-  vtkUnsignedCharArray* types = input->GetCellTypesArray();
-  const vtkIdType cells = input->GetNumberOfCells();
-  const unsigned char first = types->GetValue(0);
-  offendingType = first;
-  if (first != VTK_TETRA && first != VTK_TRIANGLE)
-  {
-    return 0;
-  }
-  for (vtkIdType c = 1; c < cells; ++c)
-  {
-    if (types->GetValue(c) != first)
-    {
-      offendingType = types->GetValue(c);
-      return 0;
-    }
-  }
-  return first == VTK_TETRA ? 3 : 2;
-}
 } // namespace
 
 stmMarchingSimplices::stmMarchingSimplices()
@@ -506,7 +484,7 @@ int stmMarchingSimplices::RequestData(
     return fail("the input mesh has no cells");
   }
   int offendingType = 0;
-  const int dimension = SimplexDimension(input, offendingType);
+  const int dimension = stmCutInput::SimplexDimension(input, offendingType);
   if (dimension == 0)
   {
     return fail("the input must be a mesh of only tetrahedra or only triangles, but it has cells "
@@ -517,24 +495,11 @@ int stmMarchingSimplices::RequestData(
   int association = -1;
   vtkDataArray* function = this->GetInputArrayToProcess(0, input, association);
   const char* name = this->GetInputArrayInformation(0)->Get(vtkDataObject::FIELD_NAME());
-  if (!function && (!name || !*name))
+  std::string error;
+  function = stmCutInput::FindSeparatingFunction(function, association, name, input, error);
+  if (!function)
   {
-    // No array chosen (a script that created the filter before its input had data): the
-    // separating function of the stage before, else the active point scalars.
-    function = input->GetPointData()->GetArray("SeparatingFunction");
-    function = function ? function : input->GetPointData()->GetScalars();
-    association = vtkDataObject::FIELD_ASSOCIATION_POINTS;
-  }
-  if (!function || association != vtkDataObject::FIELD_ASSOCIATION_POINTS)
-  {
-    return fail(std::string("no point array '") + (name ? name : "") +
-      "' to use as the separating function; compute one (Spacetree Tessellate, Separating "
-      "Function) or select an existing point array");
-  }
-  if (function->GetNumberOfComponents() != 1)
-  {
-    return fail(std::string("the separating function '") + function->GetName() + "' has " +
-      std::to_string(function->GetNumberOfComponents()) + " components; it must be a scalar");
+    return fail(error);
   }
   std::vector<double> values;
   const double* valuePointer = stmFunctionValues::AsDoubles(function, values);

@@ -1,9 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "stmSeparatingFunction.h"
 
-#include "stmFunctionValues.h"
-
-#include "Cut/SeparatingFunction.h"
+#include "stmSurfaceFunction.h"
 
 #include "vtkDataArray.h"
 #include "vtkDoubleArray.h"
@@ -75,68 +73,24 @@ int stmSeparatingFunction::FillInputPortInformation(int port, vtkInformation* in
 
 namespace
 {
-/// f at every point from the gray image: trilinear on the image's point grid (voxel values at
-/// the points), minus the threshold, negated for a bright inside.
+/// f at every point from the gray image (stmSurfaceFunction: trilinear on the image's point
+/// grid, minus the threshold, negated for a bright inside).
 bool SampleGrayImage(vtkImageData* image, double threshold, bool insideAbove, vtkPoints* points,
   double* f, std::string& error)
 {
-  vtkDataArray* scalars = image->GetPointData()->GetScalars();
-  if (!scalars)
+  stmSurfaceFunction function;
+  if (!function.SetGrayImage(image, threshold, insideAbove, error))
   {
-    error = "the gray image has no point scalars";
     return false;
   }
-  int dims[3];
-  image->GetDimensions(dims);
-  if (static_cast<vtkIdType>(dims[0]) * dims[1] * dims[2] == 0)
-  {
-    error = "the gray image is empty";
-    return false;
-  }
-  // f is computed in place, so a double array the image owns is copied once, anything else
-  // converted once.
-  std::vector<double> gray;
-  if (scalars->GetNumberOfComponents() == 1)
-  {
-    const double* values = stmFunctionValues::AsDoubles(scalars, gray);
-    if (values != gray.data())
-    {
-      gray.assign(values, values + scalars->GetNumberOfTuples());
-    }
-  }
-  else
-  {
-    gray.resize(static_cast<std::size_t>(scalars->GetNumberOfTuples()));
-    for (vtkIdType i = 0; i < scalars->GetNumberOfTuples(); ++i)
-    {
-      gray[i] = scalars->GetComponent(i, 0);
-    }
-  }
-  const double sign = insideAbove ? -1.0 : 1.0;
-  double outside = 1.0;
-  for (double& value : gray)
-  {
-    value = sign * (value - threshold);
-    if (std::isfinite(value))
-    {
-      outside = std::max(outside, value);
-    }
-  }
-  const stm::VoxelField<3, double> field{ { dims[0], dims[1], dims[2] }, gray.data(), outside };
   vtkSMPTools::For(0, points->GetNumberOfPoints(),
     [&](vtkIdType begin, vtkIdType end)
     {
       for (vtkIdType p = begin; p < end; ++p)
       {
-        double x[3], index[3];
+        double x[3];
         points->GetPoint(p, x);
-        image->TransformPhysicalPointToContinuousIndex(x, index);
-        // Flat axes have one sample: take it wherever the point is along them.
-        for (int axis = 0; axis < 3; ++axis)
-        {
-          index[axis] = dims[axis] == 1 ? 0.5 : index[axis] + 0.5;
-        }
-        f[p] = field.Sample(index);
+        f[p] = function.Evaluate(x);
       }
     });
   return true;

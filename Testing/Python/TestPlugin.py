@@ -26,6 +26,7 @@ from paraview.simple import (
 
 import stmtesting as T
 from vtkmodules.vtkCommonDataModel import VTK_TETRA, VTK_TRIANGLE
+from vtkmodules.util.numpy_support import vtk_to_numpy
 
 PLUGIN = T.env("STM_PLUGIN")
 AAL = T.env("STM_AAL")
@@ -254,6 +255,35 @@ T.check(inside_ball.GetDataInformation().GetNumberOfCells() > 0, "nothing inside
 for axis, centre in enumerate((90, 108, 90)):
     T.check(centre - 40 - 1e-9 <= bounds[2 * axis] and bounds[2 * axis + 1] <= centre + 40 + 1e-9,
             "the inside of the ball leaves the sphere along axis %d: %r" % (axis, bounds))
+# Boundary Smooth on the inside of the ball (all one material: its whole boundary is the
+# surface), projected back onto the sphere: the same cells, moved points on the sphere.
+smooth_ball = BoundarySmooth(Input=inside_ball, ProjectToFunction=1, ImplicitFunction="Sphere")
+smooth_ball.ImplicitFunction.Center = [90, 108, 90]
+smooth_ball.ImplicitFunction.Radius = 40
+smoothed = vtk_output(smooth_ball)
+inside_data = vtk_output(inside_ball)
+T.check_equal(smoothed.GetNumberOfCells(), inside_data.GetNumberOfCells(), "smoothed cells")
+displacements = vtk_to_numpy(smoothed.GetPointData().GetArray("SmoothingDisplacement"))
+moved_points = int(np.count_nonzero(np.any(displacements != 0, axis=1)))
+T.check(moved_points > 1000, "Boundary Smooth moved only %d points" % moved_points)
+smoothed_points = T.points(smoothed)
+radii = np.linalg.norm(smoothed_points - np.array([90.0, 108.0, 90.0]), axis=1)
+T.check(float(radii.max()) <= 40 + 1e-6, "a smoothed point leaves the sphere: %r" % radii.max())
+
+# --- vertex snapping before the cut: fewer tetrahedra, the same two materials ------------------
+snapped = VertexSnap(Input=tessellated)
+snapped_cut = MarchingSimplices(Input=snapped)
+snapped_data = vtk_output(snapped_cut)
+snap_data = vtk_output(snapped)
+T.check(snap_data.GetPointData().GetArray("Snapped") is not None, "no Snapped point array")
+moved = int(vtk_to_numpy(snap_data.GetPointData().GetArray("Snapped")).sum())
+T.check(moved > 0, "VertexSnap moved no point")
+T.check(bool(np.all(T.cell_types(snapped_data) == VTK_TETRA)), "the snapped cut has non-tetrahedra")
+T.check(0 < snapped_data.GetNumberOfCells() < cut_data.GetNumberOfCells(),
+        "snapping gives %d tetrahedra, the cut alone %d"
+        % (snapped_data.GetNumberOfCells(), cut_data.GetNumberOfCells()))
+T.check_equal(sorted(set(T.cell_array(snapped_data, "Material").tolist())), [0, 1],
+              "materials after snapping")
 
 print("%s: plugin test passed (%d tetrahedra, %d triangles)"
       % (DRIVER, cells, mesh2d_data.GetNumberOfCells()))

@@ -35,6 +35,8 @@ EXPECTED_PROXIES = {
     ("filters", "stmSpacetreeTessellate"),
     ("filters", "stmMarchingSimplices"),
     ("filters", "stmSeparatingFunction"),
+    ("filters", "stmVertexSnap"),
+    ("filters", "stmBoundarySmooth"),
     ("sources", "stmNIFTIReader"),
 }
 # Properties whose command is not a plain SetX/GetX pair, and what they are checked by instead.
@@ -65,6 +67,17 @@ PRINTED_DEFAULTS = {
                              "NumberOfSplitCells: 0", "NumberOfCutPoints: 0"],
     "stmSeparatingFunction": ["Mode: ImplicitFunction", "Threshold: 0",
                               "InsideAboveThreshold: On"],
+    "stmVertexSnap": ["Alpha: 0.333333", "QualityBound: 0", "SnapRule: QualityDriven",
+                      "IsoValue: 0", "ZeroTolerance: 1e-09", "Projection: Edge",
+                      "ImplicitFunction: (none)", "Threshold: 0", "InsideAboveThreshold: On",
+                      "NumberOfSnappedPoints: 0", "NumberOfRefusedSnaps: 0",
+                      "NumberOfAdjustedPoints: 0"],
+    "stmBoundarySmooth": ["NumberOfIterations: 20", "Method: Taubin", "RelaxationFactor: 0.5",
+                          "PassBand: 0.1", "MaxDisplacement: 0", "NumberOfInteriorLayers: 2",
+                          "MaxConditionNumber: 3.5", "MinDihedralAngle: 15",
+                          "BackgroundMaterial: 0", "ProjectToFunction: Off",
+                          "ImplicitFunction: (none)", "NumberOfMovedPoints: 0",
+                          "NumberOfRejectedMoves: 0"],
 }
 
 problems = []
@@ -253,7 +266,9 @@ def check_label_array(where, prop, obj):
 
 
 xml_files = sorted(glob.glob(os.path.join(XML_DIR, "*.xml")))
-T.check(len(xml_files) == 6, "expected 6 XML files in %s, found %r" % (XML_DIR, xml_files))
+# One proxy per XML file.
+T.check(len(xml_files) == len(EXPECTED_PROXIES), "expected %d XML files in %s, found %r"
+        % (len(EXPECTED_PROXIES), XML_DIR, xml_files))
 found = set()
 fresh = {}
 for path in xml_files:

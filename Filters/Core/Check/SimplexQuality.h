@@ -32,12 +32,41 @@ struct SimplexShape
   double MinDihedralDegrees = 0.0;
 };
 
-/// Measures the simplex with the given Dim + 1 corners of Dim coordinates each.
-template <int Dim>
-SimplexShape<Dim> MeasureSimplex(const double* const (&corners)[Dim + 1])
+/// SimplexShape with the cosine of the smallest dihedral angle instead of the angle: what the
+/// hot loops compare (against cos(bound)), since acos costs as much as the rest of a tetrahedron.
+struct SimplexCosines
 {
-  static_assert(Dim >= 1 && Dim <= 4, "simplex quality supports dimensions 1 to 4");
-  SimplexShape<Dim> shape;
+  double Determinant = 0.0;
+  double Condition = std::numeric_limits<double>::infinity();
+  /// The largest cosine of an angle between two facets, in [-1, 1]; 1 unless Determinant > 0;
+  /// -1 for segments.
+  double LargestDihedralCosine = 1.0;
+};
+
+/// The angle in degrees of a cosine from SimplexCosines: monotone (non-increasing), so the
+/// smallest angle of a set of simplices is the angle of their largest cosine.
+inline double DihedralDegrees(double cosine)
+{
+  return std::acos(cosine > 1.0 ? 1.0 : cosine) * (180.0 / 3.14159265358979323846);
+}
+
+namespace detail
+{
+/// The closed-form terms of a triangle or tetrahedron (see MeasureSimplexCosines).
+template <int Dim>
+struct FacetTerms
+{
+  double Determinant;
+  double EdgeSum; // sum of the squared edge lengths
+  double Normals[Dim + 1][Dim];
+  double Squared[Dim + 1]; // |n_i|^2
+  double NormalSum;
+};
+
+template <int Dim>
+void ComputeFacetTerms(const double* const (&corners)[Dim + 1], FacetTerms<Dim>& t)
+{
+  static_assert(Dim == 2 || Dim == 3, "closed forms for triangles and tetrahedra only");
   double edges[Dim][Dim]; // edges[r][c]: coordinate r of edge c, i.e. A
   for (int c = 0; c < Dim; ++c)
   {
@@ -46,114 +75,320 @@ SimplexShape<Dim> MeasureSimplex(const double* const (&corners)[Dim + 1])
       edges[r][c] = corners[c + 1][r] - corners[0][r];
     }
   }
-  shape.Determinant = stm::Determinant<Dim>(edges);
-  if (!(shape.Determinant > 0.0))
+  auto dot = [](const double* u, const double* v)
   {
-    return shape;
-  }
-  double gram[Dim][Dim];
-  for (int i = 0; i < Dim; ++i)
+    double sum = 0.0;
+    for (int r = 0; r < Dim; ++r)
+    {
+      sum += u[r] * v[r];
+    }
+    return sum;
+  };
+  if constexpr (Dim == 2)
   {
-    for (int j = 0; j < Dim; ++j)
+    // In the plane n_i is the opposite edge turned by 90 degrees; only inner products matter,
+    // so the edges x2 - x1, x0 - x2, x1 - x0 themselves (they sum to zero as the n_i must).
+    for (int r = 0; r < 2; ++r)
     {
-      double sum = 0.0;
-      for (int r = 0; r < Dim; ++r)
-      {
-        sum += edges[r][i] * edges[r][j];
-      }
-      gram[i][j] = sum;
+      t.Normals[0][r] = corners[2][r] - corners[1][r];
+      t.Normals[1][r] = corners[0][r] - corners[2][r];
+      t.Normals[2][r] = corners[1][r] - corners[0][r];
     }
-  }
-  // M^-1 by Gauss-Jordan on the symmetric positive definite Gram matrix (no pivoting needed).
-  double inverse[Dim][Dim];
-  double work[Dim][Dim];
-  for (int i = 0; i < Dim; ++i)
-  {
-    for (int j = 0; j < Dim; ++j)
+    for (int i = 0; i < 3; ++i)
     {
-      work[i][j] = gram[i][j];
-      inverse[i][j] = i == j ? 1.0 : 0.0;
+      t.Squared[i] = dot(t.Normals[i], t.Normals[i]);
     }
-  }
-  for (int p = 0; p < Dim; ++p)
-  {
-    const double pivot = work[p][p];
-    if (!(pivot > 0.0))
-    {
-      shape.Determinant = 0.0;
-      return shape;
-    }
-    for (int j = 0; j < Dim; ++j)
-    {
-      work[p][j] /= pivot;
-      inverse[p][j] /= pivot;
-    }
-    for (int i = 0; i < Dim; ++i)
-    {
-      if (i != p)
-      {
-        const double factor = work[i][p];
-        for (int j = 0; j < Dim; ++j)
-        {
-          work[i][j] -= factor * work[p][j];
-          inverse[i][j] -= factor * inverse[p][j];
-        }
-      }
-    }
-  }
-  // tr(M G^-1) with G^-1 = 2 (I - 1 1^T / (d + 1)); tr(G M^-1) with G = (I + 1 1^T) / 2.
-  double traceM = 0.0, sumM = 0.0, traceInverse = 0.0, sumInverse = 0.0;
-  for (int i = 0; i < Dim; ++i)
-  {
-    traceM += gram[i][i];
-    traceInverse += inverse[i][i];
-    for (int j = 0; j < Dim; ++j)
-    {
-      sumM += gram[i][j];
-      sumInverse += inverse[i][j];
-    }
-  }
-  const double first = 2.0 * (traceM - sumM / (Dim + 1));
-  const double second = 0.5 * (traceInverse + sumInverse);
-  shape.Condition = std::sqrt(first * second) / Dim;
-
-  if constexpr (Dim == 1)
-  {
-    shape.MinDihedralDegrees = 180.0;
+    t.EdgeSum = t.Squared[0] + t.Squared[1] + t.Squared[2];
+    t.NormalSum = t.EdgeSum;
+    // Determinant<2>'s expansion, term for term (the same bits).
+    t.Determinant = edges[0][0] * edges[1][1] - edges[0][1] * edges[1][0];
   }
   else
   {
-    // Inner products of the barycentric gradients g_0..g_d, g_0 = -(g_1 + ... + g_d).
-    double products[Dim + 1][Dim + 1];
-    for (int i = 0; i < Dim; ++i)
+    double e[6][3]; // x1 - x0, x2 - x0, x3 - x0, x2 - x1, x3 - x1, x3 - x2
+    for (int r = 0; r < 3; ++r)
     {
-      for (int j = 0; j < Dim; ++j)
-      {
-        products[i + 1][j + 1] = inverse[i][j];
-      }
+      e[0][r] = edges[r][0];
+      e[1][r] = edges[r][1];
+      e[2][r] = edges[r][2];
+      e[3][r] = corners[2][r] - corners[1][r];
+      e[4][r] = corners[3][r] - corners[1][r];
+      e[5][r] = corners[3][r] - corners[2][r];
     }
-    products[0][0] = sumInverse;
-    for (int j = 0; j < Dim; ++j)
+    auto cross = [](const double* u, const double* v, double* w)
     {
-      double column = 0.0;
-      for (int i = 0; i < Dim; ++i)
-      {
-        column += inverse[i][j];
-      }
-      products[0][j + 1] = products[j + 1][0] = -column;
+      w[0] = u[1] * v[2] - u[2] * v[1];
+      w[1] = u[2] * v[0] - u[0] * v[2];
+      w[2] = u[0] * v[1] - u[1] * v[0];
+    };
+    // n_0 from the opposite face's own edges rather than as -(n_1 + n_2 + n_3), which cancels
+    // on needles.
+    cross(e[4], e[3], t.Normals[0]);
+    cross(e[1], e[2], t.Normals[1]);
+    cross(e[2], e[0], t.Normals[2]);
+    cross(e[0], e[1], t.Normals[3]);
+    t.EdgeSum = 0.0;
+    for (int k = 0; k < 6; ++k)
+    {
+      t.EdgeSum += dot(e[k], e[k]);
     }
-    double largestCosine = -1.0;
+    for (int i = 0; i < 4; ++i)
+    {
+      t.Squared[i] = dot(t.Normals[i], t.Normals[i]);
+    }
+    t.NormalSum = t.Squared[0] + t.Squared[1] + t.Squared[2] + t.Squared[3];
+    // Determinant<3>'s cofactor expansion along the first row, term for term: its minors are
+    // the first coordinates of n_1, -n_2 and n_3, so this is the same bits (exact on lattices,
+    // like the rest of the core), without the call the recursive template costs.
+    t.Determinant =
+      e[0][0] * t.Normals[1][0] + e[1][0] * t.Normals[2][0] + e[2][0] * t.Normals[3][0];
+  }
+}
+
+/// The condition number is sqrt(EdgeSum NormalSum) / (ConditionScale D).
+template <int Dim>
+double ConditionScale()
+{
+  return Dim == 2 ? 2.0 * std::sqrt(3.0) : 6.0;
+}
+} // namespace detail
+
+/// Measures the simplex with the given Dim + 1 corners of Dim coordinates each. Triangles and
+/// tetrahedra, the hot cases, use closed forms of the Gram matrix expressions (header comment):
+/// with the facet normals n_i of length (d - 1)! times the facet measure (the rows of
+/// det(A) A^-1, so n_0 = -(n_1 + ... + n_d)) and D = det(A),
+///   tr(M G^-1) = 2 sum|e|^2 / (d + 1) over the edges e,  tr(G M^-1) = sum|n_i|^2 / (2 D^2),
+/// hence the condition number sqrt(sum|e|^2 sum|n_i|^2) / (6 D) for tetrahedra and
+/// sum|e|^2 / (2 sqrt(3) D) for triangles (where the n_i are the turned edges), and the
+/// dihedral cosines -n_i . n_j / (|n_i| |n_j|). Segments and 4-simplices keep the generic Gram
+/// matrix inverse.
+template <int Dim>
+SimplexCosines MeasureSimplexCosines(const double* const (&corners)[Dim + 1])
+{
+  static_assert(Dim >= 1 && Dim <= 4, "simplex quality supports dimensions 1 to 4");
+  SimplexCosines shape;
+  if constexpr (Dim == 2 || Dim == 3)
+  {
+    detail::FacetTerms<Dim> t;
+    detail::ComputeFacetTerms<Dim>(corners, t);
+    shape.Determinant = t.Determinant;
+    if (!(t.Determinant > 0.0))
+    {
+      return shape;
+    }
+    shape.Condition =
+      std::sqrt(t.EdgeSum * t.NormalSum) / (detail::ConditionScale<Dim>() * t.Determinant);
+    double inverse[Dim + 1];
+    for (int i = 0; i <= Dim; ++i)
+    {
+      inverse[i] = 1.0 / std::sqrt(t.Squared[i]);
+    }
+    double largest = -1.0;
     for (int i = 0; i <= Dim; ++i)
     {
       for (int j = i + 1; j <= Dim; ++j)
       {
-        const double cosine = -products[i][j] / std::sqrt(products[i][i] * products[j][j]);
-        largestCosine = cosine > largestCosine ? cosine : largestCosine;
+        double product = 0.0;
+        for (int r = 0; r < Dim; ++r)
+        {
+          product += t.Normals[i][r] * t.Normals[j][r];
+        }
+        const double cosine = -product * (inverse[i] * inverse[j]);
+        largest = cosine > largest ? cosine : largest;
       }
     }
-    largestCosine = largestCosine > 1.0 ? 1.0 : largestCosine;
-    shape.MinDihedralDegrees = std::acos(largestCosine) * (180.0 / 3.14159265358979323846);
+    shape.LargestDihedralCosine = largest > 1.0 ? 1.0 : largest;
+    return shape;
   }
+  else
+  {
+    double edges[Dim][Dim]; // edges[r][c]: coordinate r of edge c, i.e. A
+    for (int c = 0; c < Dim; ++c)
+    {
+      for (int r = 0; r < Dim; ++r)
+      {
+        edges[r][c] = corners[c + 1][r] - corners[0][r];
+      }
+    }
+    shape.Determinant = stm::Determinant<Dim>(edges);
+    if (!(shape.Determinant > 0.0))
+    {
+      return shape;
+    }
+    double gram[Dim][Dim];
+    for (int i = 0; i < Dim; ++i)
+    {
+      for (int j = 0; j < Dim; ++j)
+      {
+        double sum = 0.0;
+        for (int r = 0; r < Dim; ++r)
+        {
+          sum += edges[r][i] * edges[r][j];
+        }
+        gram[i][j] = sum;
+      }
+    }
+    // M^-1 by Gauss-Jordan on the symmetric positive definite Gram matrix (no pivoting needed).
+    double inverse[Dim][Dim];
+    double work[Dim][Dim];
+    for (int i = 0; i < Dim; ++i)
+    {
+      for (int j = 0; j < Dim; ++j)
+      {
+        work[i][j] = gram[i][j];
+        inverse[i][j] = i == j ? 1.0 : 0.0;
+      }
+    }
+    for (int p = 0; p < Dim; ++p)
+    {
+      const double pivot = work[p][p];
+      if (!(pivot > 0.0))
+      {
+        shape.Determinant = 0.0;
+        return shape;
+      }
+      for (int j = 0; j < Dim; ++j)
+      {
+        work[p][j] /= pivot;
+        inverse[p][j] /= pivot;
+      }
+      for (int i = 0; i < Dim; ++i)
+      {
+        if (i != p)
+        {
+          const double factor = work[i][p];
+          for (int j = 0; j < Dim; ++j)
+          {
+            work[i][j] -= factor * work[p][j];
+            inverse[i][j] -= factor * inverse[p][j];
+          }
+        }
+      }
+    }
+    // tr(M G^-1) with G^-1 = 2 (I - 1 1^T / (d + 1)); tr(G M^-1) with G = (I + 1 1^T) / 2.
+    double traceM = 0.0, sumM = 0.0, traceInverse = 0.0, sumInverse = 0.0;
+    for (int i = 0; i < Dim; ++i)
+    {
+      traceM += gram[i][i];
+      traceInverse += inverse[i][i];
+      for (int j = 0; j < Dim; ++j)
+      {
+        sumM += gram[i][j];
+        sumInverse += inverse[i][j];
+      }
+    }
+    const double first = 2.0 * (traceM - sumM / (Dim + 1));
+    const double second = 0.5 * (traceInverse + sumInverse);
+    shape.Condition = std::sqrt(first * second) / Dim;
+    if constexpr (Dim == 1)
+    {
+      shape.LargestDihedralCosine = -1.0;
+    }
+    else
+    {
+      // Inner products of the barycentric gradients g_0..g_d, g_0 = -(g_1 + ... + g_d).
+      double products[Dim + 1][Dim + 1];
+      for (int i = 0; i < Dim; ++i)
+      {
+        for (int j = 0; j < Dim; ++j)
+        {
+          products[i + 1][j + 1] = inverse[i][j];
+        }
+      }
+      products[0][0] = sumInverse;
+      for (int j = 0; j < Dim; ++j)
+      {
+        double column = 0.0;
+        for (int i = 0; i < Dim; ++i)
+        {
+          column += inverse[i][j];
+        }
+        products[0][j + 1] = products[j + 1][0] = -column;
+      }
+      double largestCosine = -1.0;
+      for (int i = 0; i <= Dim; ++i)
+      {
+        for (int j = i + 1; j <= Dim; ++j)
+        {
+          const double cosine = -products[i][j] / std::sqrt(products[i][i] * products[j][j]);
+          largestCosine = cosine > largestCosine ? cosine : largestCosine;
+        }
+      }
+      shape.LargestDihedralCosine = largestCosine > 1.0 ? 1.0 : largestCosine;
+    }
+    return shape;
+  }
+}
+
+/// Whether the simplex is surely within the bounds: Determinant > 0, Condition <= maxCondition
+/// and LargestDihedralCosine <= maxCosine (maxCosine >= 0), decided for triangles and
+/// tetrahedra by squared comparisons, without the square roots and divisions of the measure,
+/// and with a relative margin of 1e-12 that covers their rounding: true implies that
+/// MeasureSimplexCosines's figures are within the bounds. False decides nothing (always so for
+/// segments and 4-simplices): measure.
+template <int Dim>
+bool SimplexSurelyWithin(
+  const double* const (&corners)[Dim + 1], double maxCondition, double maxCosine)
+{
+  if constexpr (Dim == 2 || Dim == 3)
+  {
+    if (!(maxCosine >= 0.0))
+    {
+      return false;
+    }
+    constexpr double Margin = 1.0 - 1e-12;
+    detail::FacetTerms<Dim> t;
+    detail::ComputeFacetTerms<Dim>(corners, t);
+    if (!(t.Determinant > 0.0))
+    {
+      return false;
+    }
+    const double scaled = detail::ConditionScale<Dim>() * t.Determinant * maxCondition;
+    if (!(t.EdgeSum * t.NormalSum <= scaled * scaled * Margin))
+    {
+      return false;
+    }
+    // -n_i . n_j / (|n_i| |n_j|) <= c: true for n_i . n_j >= 0, else (n_i . n_j)^2 <= c^2 s_i s_j.
+    const double squaredCosine = maxCosine * maxCosine * Margin;
+    for (int i = 0; i <= Dim; ++i)
+    {
+      for (int j = i + 1; j <= Dim; ++j)
+      {
+        double product = 0.0;
+        for (int r = 0; r < Dim; ++r)
+        {
+          product += t.Normals[i][r] * t.Normals[j][r];
+        }
+        if (product < 0.0 && !(product * product <= squaredCosine * t.Squared[i] * t.Squared[j]))
+        {
+          return false;
+        }
+      }
+    }
+    return true;
+  }
+  else
+  {
+    (void)corners;
+    (void)maxCondition;
+    (void)maxCosine;
+    return false;
+  }
+}
+
+/// Measures the simplex with the given Dim + 1 corners of Dim coordinates each.
+template <int Dim>
+SimplexShape<Dim> MeasureSimplex(const double* const (&corners)[Dim + 1])
+{
+  const SimplexCosines cosines = MeasureSimplexCosines<Dim>(corners);
+  SimplexShape<Dim> shape;
+  shape.Determinant = cosines.Determinant;
+  if (!(cosines.Determinant > 0.0))
+  {
+    return shape;
+  }
+  shape.Condition = cosines.Condition;
+  shape.MinDihedralDegrees = Dim == 1 ? 180.0 : DihedralDegrees(cosines.LargestDihedralCosine);
   return shape;
 }
 

@@ -74,6 +74,54 @@ struct VoxelField
     }
     return sum;
   }
+
+  /// Sample and its gradient (per voxel unit along each axis); on a dual cell's face the
+  /// derivative across it is the upper cell's. Vertex snapping projects along it.
+  double SampleWithGradient(const double* position, double* gradient) const
+  {
+    LatticeIndex<Dim> lower;
+    double weights[Dim];
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      const double dual = position[axis] - 0.5;
+      const double floor = std::floor(dual);
+      lower[axis] = static_cast<std::int64_t>(floor);
+      weights[axis] = dual - floor;
+      gradient[axis] = 0.0;
+    }
+    double sum = 0.0;
+    for (unsigned corner = 0; corner < (1u << Dim); ++corner)
+    {
+      LatticeIndex<Dim> voxel = lower;
+      double factors[Dim];
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        const bool upper = (corner >> axis) & 1u;
+        voxel[axis] += upper ? 1 : 0;
+        factors[axis] = upper ? weights[axis] : 1.0 - weights[axis];
+      }
+      const double value = this->At(voxel);
+      double weight = 1.0;
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        weight *= factors[axis];
+        double others = (corner >> axis) & 1u ? 1.0 : -1.0;
+        for (int other = 0; other < Dim; ++other)
+        {
+          others *= other == axis ? 1.0 : factors[other];
+        }
+        if (others != 0.0)
+        {
+          gradient[axis] += others * value;
+        }
+      }
+      if (weight != 0.0)
+      {
+        sum += weight * value;
+      }
+    }
+    return sum;
+  }
 };
 
 /// The body-of-interest indicator of a spacetree's voxels: -1 where the leaf covering the voxel

@@ -7,7 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
 
 namespace
 {
@@ -113,6 +115,144 @@ TEST(SimplexQuality, ConditionIsInvariantUnderSimilarity)
   EXPECT_NEAR(a.Condition, b.Condition, 1e-12);
   EXPECT_NEAR(a.MinDihedralDegrees, b.MinDihedralDegrees, 1e-10);
   EXPECT_NEAR(b.Determinant, a.Determinant * scale * scale * scale, 1e-12);
+}
+
+/// The Gram matrix definitions of the header's comment, computed directly (inverse by
+/// cofactors), as the reference of the closed forms that MeasureSimplex uses for triangles and
+/// tetrahedra.
+template <int Dim>
+void GramReference(const double (&x)[Dim + 1][Dim], double& condition, double& largestCosine)
+{
+  double m[Dim][Dim];
+  for (int i = 0; i < Dim; ++i)
+  {
+    for (int j = 0; j < Dim; ++j)
+    {
+      m[i][j] = 0.0;
+      for (int r = 0; r < Dim; ++r)
+      {
+        m[i][j] += (x[i + 1][r] - x[0][r]) * (x[j + 1][r] - x[0][r]);
+      }
+    }
+  }
+  double inverse[Dim][Dim];
+  if constexpr (Dim == 2)
+  {
+    const double det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    inverse[0][0] = m[1][1] / det;
+    inverse[1][1] = m[0][0] / det;
+    inverse[0][1] = inverse[1][0] = -m[0][1] / det;
+  }
+  else
+  {
+    for (int i = 0; i < 3; ++i)
+    {
+      for (int j = 0; j < 3; ++j)
+      {
+        const int i1 = (j + 1) % 3, i2 = (j + 2) % 3, j1 = (i + 1) % 3, j2 = (i + 2) % 3;
+        inverse[i][j] = m[i1][j1] * m[i2][j2] - m[i1][j2] * m[i2][j1];
+      }
+    }
+    const double det = m[0][0] * inverse[0][0] + m[0][1] * inverse[1][0] + m[0][2] * inverse[2][0];
+    for (auto& row : inverse)
+    {
+      for (double& v : row)
+      {
+        v /= det;
+      }
+    }
+  }
+  double traceM = 0.0, sumM = 0.0, traceInverse = 0.0, sumInverse = 0.0;
+  double products[Dim + 1][Dim + 1];
+  for (int i = 0; i < Dim; ++i)
+  {
+    traceM += m[i][i];
+    traceInverse += inverse[i][i];
+    double column = 0.0;
+    for (int j = 0; j < Dim; ++j)
+    {
+      sumM += m[i][j];
+      sumInverse += inverse[i][j];
+      column += inverse[j][i];
+      products[i + 1][j + 1] = inverse[i][j];
+    }
+    products[0][i + 1] = products[i + 1][0] = -column;
+  }
+  products[0][0] = sumInverse;
+  condition =
+    std::sqrt(2.0 * (traceM - sumM / (Dim + 1)) * 0.5 * (traceInverse + sumInverse)) / Dim;
+  largestCosine = -1.0;
+  for (int i = 0; i <= Dim; ++i)
+  {
+    for (int j = i + 1; j <= Dim; ++j)
+    {
+      largestCosine =
+        std::max(largestCosine, -products[i][j] / std::sqrt(products[i][i] * products[j][j]));
+    }
+  }
+}
+
+template <int Dim>
+void CheckClosedForms()
+{
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+  int checked = 0, sure = 0;
+  for (int trial = 0; trial < 20000; ++trial)
+  {
+    double x[Dim + 1][Dim];
+    for (auto& point : x)
+    {
+      for (double& c : point)
+      {
+        c = coordinate(random);
+      }
+    }
+    const double* corners[Dim + 1];
+    for (int v = 0; v <= Dim; ++v)
+    {
+      corners[v] = x[v];
+    }
+    const stm::SimplexCosines shape = stm::MeasureSimplexCosines<Dim>(corners);
+    if (!(shape.Determinant > 0.0) || shape.Condition > 100.0)
+    {
+      continue;
+    }
+    double condition = 0.0, cosine = 0.0;
+    GramReference<Dim>(x, condition, cosine);
+    // The Gram matrix squares the simplex's conditioning, so the reference's own rounding
+    // grows like condition^2 eps.
+    const double tolerance = 1e-12 * condition * condition;
+    EXPECT_NEAR(shape.Condition, condition, tolerance * condition);
+    EXPECT_NEAR(shape.LargestDihedralCosine, cosine, tolerance);
+    EXPECT_EQ(
+      Measure<Dim>(x).MinDihedralDegrees, stm::DihedralDegrees(shape.LargestDihedralCosine));
+    // The bounds test decides only what the measure confirms, also right at the figures.
+    for (const double scale : { 1.0, 1.0 + 1e-13, 1.0 + 1e-9, 1.5 })
+    {
+      const double maxCondition = shape.Condition * scale;
+      const double maxCosine = std::min(1.0, std::max(0.0, shape.LargestDihedralCosine) * scale);
+      if (stm::SimplexSurelyWithin<Dim>(corners, maxCondition, maxCosine))
+      {
+        EXPECT_LE(shape.Condition, maxCondition);
+        EXPECT_LE(shape.LargestDihedralCosine, maxCosine);
+        sure += scale == 1.5;
+      }
+      else
+      {
+        EXPECT_NE(scale, 1.5) << "a clear case undecided";
+      }
+    }
+    ++checked;
+  }
+  EXPECT_GT(checked, 5000);
+  EXPECT_EQ(sure, checked);
+}
+
+TEST(SimplexQuality, ClosedFormsAgreeWithTheGramMatrix)
+{
+  CheckClosedForms<2>();
+  CheckClosedForms<3>();
 }
 
 } // namespace

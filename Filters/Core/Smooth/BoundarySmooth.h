@@ -1,0 +1,1009 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#ifndef stmCoreBoundarySmooth_h
+#define stmCoreBoundarySmooth_h
+
+// Smoothing of the boundary and the material interfaces of a simplicial mesh (paper, section
+// 3.4), followed by volumetric Laplacian smoothing of a few layers of interior points next to
+// them (section 4, end), with every move validated against inversion and element quality.
+//
+// Decisions where the paper is silent:
+// - Surface facets are facets shared by two cells of different material, plus outer-boundary
+//   facets (in one cell only) whose cell is not BackgroundMaterial. The outer-boundary facets of
+//   background cells are the box of background that the tessellation adds around the body:
+//   their points are fixed, bit for bit. A point that is both on the surface and fixed is fixed.
+//   Surface neighbours of a surface point are the points joined to it by edges of surface facets
+//   (polylines in 2D, triangles in 3D); in 1D facets are points and have no edges, so surface
+//   points never move there and only interior layers are smoothed.
+// - Methods (uniform weights): Laplacian x += lambda (c - x), c the centroid of the surface
+//   neighbours, which shrinks a closed surface; Taubin (the default) a lambda step then a mu
+//   step per iteration with 1 / mu = PassBand - 1 / lambda (mu < -lambda), which does not.
+//   The two steps of a Taubin iteration are composed before the validation (the mu step
+//   smooths the lambda targets) and the point moves once: validating each step on its own
+//   lets a rejected shrink be followed by an accepted inflation or the reverse, and the
+//   rejections, frequent next to the slivers of a cut, then drift the volume (20 iterations on
+//   a labels-function ball of radius 6 voxels: +2.5% with separate steps, +1.2% composed;
+//   scaling the mu step by the lambda step's accepted fraction instead gives -1.3% on the
+//   analytic ball, against +0.3% composed).
+// - Each step is Jacobi: targets are computed from the previous positions, in parallel. They
+//   are applied in a deterministic parallel order: a greedy colouring of the movable points,
+//   computed once in point order, gives points that share a cell different colours; colours are
+//   applied one after another and the points of one colour in parallel. A point's move only
+//   changes its incident cells, which no other point of its colour touches, so the result does
+//   not depend on the number of threads.
+// - A move is accepted iff every incident simplex keeps a strictly positive volume (the sign of
+//   the input simplex), its worst condition number is at most max(old worst of the incident
+//   simplices, min(MaxConditionNumber, worst of the input)) and its smallest dihedral angle at
+//   least min(old smallest of the incident simplices, max(MinDihedralAngle, smallest of the
+//   input)). Both bounds are at least as strict as the input's extremes and a move never makes
+//   its neighbourhood worse than itself beyond them, so the global worst element never gets
+//   worse. A rejected move is tried at half and a quarter of its length, else the point stays.
+//   Cost (every point moves at every iteration, each move measures ~20-40 cells): the angles
+//   are compared as cosines, so acos never runs per move; a cell that SimplexSurelyWithin shows
+//   within both bounds (no roots or divisions; most cells) skips the exact measure, and is
+//   cached as (condition 0, cosine -1): cached figures only enter the limits through
+//   max(figure, bound), where any figure within the bounds gives the bound, so the decisions
+//   are those of the exact figures.
+// - MaxDisplacement > 0 clips the displacement from the original position to that length. The
+//   projector, when given, moves each tentative surface position (e.g. onto f = 0) before the
+//   validation; when it fails, that tentative position is rejected.
+// - Interior layers: the NumberOfInteriorLayers rings (edge hops) of points next to the surface
+//   that are neither surface nor fixed; after each surface iteration, one volumetric Laplacian
+//   pass (lambda toward the centroid of all edge neighbours) with the same validation, which
+//   restores the quality that surface moves cost (the paper's experience).
+// - SinglePrecision rounds every tentative position to float before validating it, so that a
+//   float point array receives exactly the positions that were validated.
+
+#include "Check/SimplexQuality.h"
+#include "Common/Determinant.h"
+#include "Common/Execution.h"
+#include "Common/Status.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace stm
+{
+
+enum class SmoothingMethod
+{
+  Taubin = 0,
+  Laplacian = 1
+};
+
+struct BoundarySmoothOptions
+{
+  SmoothingMethod Method = SmoothingMethod::Taubin;
+  /// Surface iterations (a Taubin iteration is a lambda and a mu step), >= 0.
+  int NumberOfIterations = 20;
+  /// lambda, in (0, 1].
+  double RelaxationFactor = 0.5;
+  /// Taubin's pass band k, in (0, 1): 1 / mu = k - 1 / lambda.
+  double PassBand = 0.1;
+  /// Largest distance of a point from its original position; 0 = unlimited.
+  double MaxDisplacement = 0.0;
+  /// Rings of interior points next to the surface smoothed after each surface iteration, >= 0.
+  int NumberOfInteriorLayers = 2;
+  /// Quality bounds of the move validation (see the header's comment), >= 1 and in [0, 180).
+  double MaxConditionNumber = 3.5;
+  double MinDihedralAngle = 15.0;
+  /// Cells of this material on the outer boundary hold their boundary points fixed.
+  std::int64_t BackgroundMaterial = 0;
+  /// Rounds tentative positions to float before validation (for float point arrays).
+  bool SinglePrecision = false;
+};
+
+struct BoundarySmoothStats
+{
+  std::int64_t SurfacePoints = 0;
+  std::int64_t FixedPoints = 0;
+  std::int64_t InteriorLayerPoints = 0;
+  int NumberOfColours = 0;
+  /// Points whose final position differs from the original.
+  std::int64_t MovedPoints = 0;
+  /// Moves accepted in full, accepted at half or a quarter, and rejected (the point stayed).
+  std::int64_t AcceptedMoves = 0;
+  std::int64_t ReducedMoves = 0;
+  std::int64_t RejectedMoves = 0;
+  double WorstConditionBefore = 0.0;
+  double WorstConditionAfter = 0.0;
+  double MinDihedralBefore = 180.0;
+  double MinDihedralAfter = 180.0;
+  /// Volume per cell material (without materials: all under BackgroundMaterial + 1).
+  std::map<std::int64_t, double> VolumeBefore;
+  std::map<std::int64_t, double> VolumeAfter;
+};
+
+/// The projector of a smoothing without one.
+struct NoProjection
+{
+  bool operator()(std::int64_t, double*) const { return true; }
+};
+
+template <int Dim>
+class BoundarySmoother
+{
+public:
+  static_assert(Dim >= 1 && Dim <= 4, "boundary smoothing supports dimensions 1 to 4");
+
+  enum PointRole : std::uint8_t
+  {
+    Other = 0,
+    Surface = 1,
+    InteriorLayer = 2,
+    Fixed = 3
+  };
+
+  /// Smooths in place `points` (Dim doubles per point) of the mesh of `numberOfCells` simplices
+  /// `connectivity` (Dim + 1 ids each) with per-cell `materials` (nullptr: all one material that
+  /// is not the background). projector(pointId, double* x) may move a tentative surface position
+  /// x and returns false to reject it. On failure the points may be partly smoothed.
+  template <class IdType, class MaterialType, class Projector, class Executor>
+  Status Smooth(double* points, std::int64_t numberOfPoints, const IdType* connectivity,
+    std::int64_t numberOfCells, const MaterialType* materials, const BoundarySmoothOptions& options,
+    Projector&& projector, Executor& executor);
+
+  template <class IdType, class MaterialType, class Executor>
+  Status Smooth(double* points, std::int64_t numberOfPoints, const IdType* connectivity,
+    std::int64_t numberOfCells, const MaterialType* materials, const BoundarySmoothOptions& options,
+    Executor& executor)
+  {
+    return this->Smooth(points, numberOfPoints, connectivity, numberOfCells, materials, options,
+      NoProjection(), executor);
+  }
+
+  const BoundarySmoothStats& GetStats() const { return this->Stats; }
+  /// PointRole of every point after Smooth.
+  const std::vector<std::uint8_t>& GetPointRoles() const { return this->Roles; }
+
+  /// mu of Taubin's method for lambda and the pass band k.
+  static double TaubinMu(double lambda, double passBand) { return 1.0 / (passBand - 1.0 / lambda); }
+
+private:
+  /// A cell's quality as the move validation compares it: the cosine of the smallest dihedral
+  /// angle rather than the angle, so that the hot loop never calls acos (the angle is monotone
+  /// in the cosine, so "no smaller angle" is "no larger cosine").
+  struct Shape
+  {
+    double Condition;
+    double Cosine;
+  };
+
+  /// Per-thread buffers of the kernels.
+  struct Scratch
+  {
+    std::vector<std::int64_t> Ids;
+    std::vector<Shape> Shapes;
+  };
+
+  template <class IdType>
+  void CellCorners(const IdType* ids, std::int64_t cell, std::int64_t movedPoint,
+    const double* movedPosition, const double* (&corners)[Dim + 1]) const;
+
+  template <class IdType>
+  Shape MeasureCell(const IdType* ids, std::int64_t cell, std::int64_t movedPoint,
+    const double* movedPosition, double* determinant) const;
+
+  /// A validated Jacobi step of the points `byColour` toward lambda (c - x), followed, when mu is
+  /// not zero, by mu (c - x) on the lambda targets before the validation.
+  template <class IdType, class Projector, class Executor>
+  Status Step(const std::vector<std::vector<std::int64_t>>& byColour, bool surface, double lambda,
+    double mu, const IdType* connectivity, Projector& projector, bool project, Executor& executor);
+
+  Status Validate(double* points, std::int64_t numberOfPoints, std::int64_t numberOfCells,
+    const BoundarySmoothOptions& options) const;
+
+  BoundarySmoothStats Stats;
+  BoundarySmoothOptions Options;
+  double* Points = nullptr;
+  std::int64_t NumberOfPoints = 0;
+  std::int64_t NumberOfCells = 0;
+  std::vector<double> Original;
+  std::vector<double> Targets;
+  std::vector<double> Composed; // Taubin's targets after the mu step
+  std::vector<std::uint8_t> Roles;
+  std::vector<std::int64_t> IncidentOffsets; // point -> its cells (CSR)
+  std::vector<std::int64_t> IncidentCells;
+  std::vector<std::int64_t> SurfaceOffsets; // point -> its surface neighbours (CSR)
+  std::vector<std::int64_t> SurfaceNeighbours;
+  std::vector<std::int8_t> Signs;
+  std::vector<std::int64_t> EdgeOffsets; // interior-layer point -> its edge neighbours (CSR)
+  std::vector<std::int64_t> EdgeNeighbours;
+  std::vector<Shape> Shapes; // per cell, together: a move reads and writes both
+  std::vector<double> Determinants;
+  double ConditionBound = 0.0;
+  double CosineBound = 1.0;
+  std::atomic<std::int64_t> Accepted{ 0 };
+  std::atomic<std::int64_t> Reduced{ 0 };
+  std::atomic<std::int64_t> Rejected{ 0 };
+};
+
+// --- implementation ----------------------------------------------------------------------------
+
+template <int Dim>
+Status BoundarySmoother<Dim>::Validate(double* points, std::int64_t numberOfPoints,
+  std::int64_t numberOfCells, const BoundarySmoothOptions& options) const
+{
+  if (numberOfPoints < 0 || numberOfCells < 0 || (numberOfPoints > 0 && !points))
+  {
+    return Status::Invalid("no points or negative counts");
+  }
+  if (options.NumberOfIterations < 0)
+  {
+    return Status::Invalid("the number of iterations must be >= 0");
+  }
+  if (!(options.RelaxationFactor > 0.0 && options.RelaxationFactor <= 1.0))
+  {
+    return Status::Invalid("the relaxation factor must be in (0, 1]");
+  }
+  if (!(options.PassBand > 0.0 && options.PassBand < 1.0))
+  {
+    return Status::Invalid("the pass band must be in (0, 1)");
+  }
+  if (!(options.MaxDisplacement >= 0.0) || !std::isfinite(options.MaxDisplacement))
+  {
+    return Status::Invalid("the maximum displacement must be finite and >= 0");
+  }
+  if (options.NumberOfInteriorLayers < 0)
+  {
+    return Status::Invalid("the number of interior layers must be >= 0");
+  }
+  if (!(options.MaxConditionNumber >= 1.0))
+  {
+    return Status::Invalid("the maximum condition number must be >= 1");
+  }
+  if (!(options.MinDihedralAngle >= 0.0 && options.MinDihedralAngle < 180.0))
+  {
+    return Status::Invalid("the minimum dihedral angle must be in [0, 180) degrees");
+  }
+  return Status::Ok();
+}
+
+template <int Dim>
+template <class IdType>
+void BoundarySmoother<Dim>::CellCorners(const IdType* ids, std::int64_t cell,
+  std::int64_t movedPoint, const double* movedPosition, const double* (&corners)[Dim + 1]) const
+{
+  for (int v = 0; v <= Dim; ++v)
+  {
+    const auto id = static_cast<std::int64_t>(ids[v]);
+    corners[v] = id == movedPoint ? movedPosition : this->Points + id * Dim;
+  }
+  // A cell of the other orientation is measured with two corners swapped, so that "keeps the
+  // input's sign" and "positive" are one test.
+  if (this->Signs[cell] < 0)
+  {
+    std::swap(corners[0], corners[1]);
+  }
+}
+
+template <int Dim>
+template <class IdType>
+typename BoundarySmoother<Dim>::Shape BoundarySmoother<Dim>::MeasureCell(const IdType* ids,
+  std::int64_t cell, std::int64_t movedPoint, const double* movedPosition,
+  double* determinant) const
+{
+  const double* corners[Dim + 1];
+  this->CellCorners(ids, cell, movedPoint, movedPosition, corners);
+  const SimplexCosines shape = MeasureSimplexCosines<Dim>(corners);
+  if (determinant)
+  {
+    *determinant = shape.Determinant;
+  }
+  return { shape.Condition, shape.LargestDihedralCosine };
+}
+
+template <int Dim>
+template <class IdType, class MaterialType, class Projector, class Executor>
+Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints,
+  const IdType* connectivity, std::int64_t numberOfCells, const MaterialType* materials,
+  const BoundarySmoothOptions& options, Projector&& projector, Executor& executor)
+{
+  this->Stats = BoundarySmoothStats();
+  Status status = this->Validate(points, numberOfPoints, numberOfCells, options);
+  if (!status.IsOk())
+  {
+    return status;
+  }
+  if (numberOfCells > 0 && !connectivity)
+  {
+    return Status::Invalid("no connectivity");
+  }
+  this->Options = options;
+  this->Points = points;
+  this->NumberOfPoints = numberOfPoints;
+  this->NumberOfCells = numberOfCells;
+  this->Accepted = 0;
+  this->Reduced = 0;
+  this->Rejected = 0;
+  const std::int64_t cells = numberOfCells;
+  constexpr std::int64_t Corners = Dim + 1;
+
+  // Ids and coordinates.
+  for (std::int64_t i = 0; i < cells * Corners; ++i)
+  {
+    const auto id = static_cast<std::int64_t>(connectivity[i]);
+    if (id < 0 || id >= numberOfPoints)
+    {
+      return Status::Invalid(
+        "cell " + std::to_string(i / Corners) + " has an invalid point id " + std::to_string(id));
+    }
+  }
+  for (std::int64_t i = 0; i < numberOfPoints * Dim; ++i)
+  {
+    if (!std::isfinite(points[i]))
+    {
+      return Status::Invalid("point " + std::to_string(i / Dim) + " has a non-finite coordinate");
+    }
+  }
+  const std::int64_t background = options.BackgroundMaterial;
+  auto isBackground = [&](std::int64_t cell)
+  { return materials && static_cast<std::int64_t>(materials[cell]) == background; };
+  auto sameMaterial = [&](std::int64_t a, std::int64_t b)
+  { return !materials || materials[a] == materials[b]; };
+
+  // Point -> cells, in cell order.
+  this->IncidentOffsets.assign(static_cast<std::size_t>(numberOfPoints) + 1, 0);
+  for (std::int64_t i = 0; i < cells * Corners; ++i)
+  {
+    ++this->IncidentOffsets[static_cast<std::int64_t>(connectivity[i]) + 1];
+  }
+  for (std::int64_t p = 0; p < numberOfPoints; ++p)
+  {
+    this->IncidentOffsets[p + 1] += this->IncidentOffsets[p];
+  }
+  this->IncidentCells.assign(static_cast<std::size_t>(cells * Corners), 0);
+  {
+    std::vector<std::int64_t> next(this->IncidentOffsets.begin(), this->IncidentOffsets.end() - 1);
+    for (std::int64_t i = 0; i < cells * Corners; ++i)
+    {
+      this->IncidentCells[next[static_cast<std::int64_t>(connectivity[i])]++] = i / Corners;
+    }
+  }
+  if (executor.ShouldAbort())
+  {
+    return Status::Aborted();
+  }
+
+  // The input's shapes: orientation, quality, volume.
+  this->Signs.assign(static_cast<std::size_t>(cells), 1);
+  this->Shapes.assign(static_cast<std::size_t>(cells), Shape{ 0.0, 1.0 });
+  this->Determinants.assign(static_cast<std::size_t>(cells), 0.0);
+  struct MeasureKernel
+  {
+    using Scratch = NoScratch;
+    BoundarySmoother* Self;
+    const IdType* Connectivity;
+    bool First;
+    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    {
+      for (std::int64_t c = begin; c < end; ++c)
+      {
+        const IdType* ids = this->Connectivity + c * Corners;
+        if (this->First)
+        {
+          double edges[Dim][Dim];
+          for (int col = 0; col < Dim; ++col)
+          {
+            for (int r = 0; r < Dim; ++r)
+            {
+              edges[r][col] =
+                this->Self->Points[static_cast<std::int64_t>(ids[col + 1]) * Dim + r] -
+                this->Self->Points[static_cast<std::int64_t>(ids[0]) * Dim + r];
+            }
+          }
+          const double det = Determinant<Dim>(edges);
+          this->Self->Signs[c] = det > 0.0 ? 1 : det < 0.0 ? -1 : 0;
+        }
+        double det = 0.0;
+        const Shape shape = this->Self->MeasureCell(ids, c, -1, nullptr, &det);
+        this->Self->Shapes[c] = shape;
+        this->Self->Determinants[c] = this->Self->Signs[c] == 0 ? 0.0 : std::abs(det);
+      }
+    }
+  };
+  auto summarize = [&](double& worst, double& smallest, std::map<std::int64_t, double>& volumes)
+  {
+    worst = 0.0;
+    double largestCosine = -1.0;
+    double factorial = 1.0;
+    for (int k = 2; k <= Dim; ++k)
+    {
+      factorial *= k;
+    }
+    for (std::int64_t c = 0; c < cells; ++c)
+    {
+      worst = std::max(worst, this->Shapes[c].Condition);
+      largestCosine = std::max(largestCosine, this->Shapes[c].Cosine);
+      const std::int64_t key = materials ? static_cast<std::int64_t>(materials[c]) : background + 1;
+      volumes[key] += this->Determinants[c] / factorial;
+    }
+    // What MeasureSimplex reports for the worst cell: acos is monotone, so the angle of the
+    // largest cosine is the smallest angle.
+    smallest = Dim == 1 || cells == 0 ? 180.0 : DihedralDegrees(largestCosine);
+    return largestCosine;
+  };
+  MeasureKernel measure{ this, connectivity, true };
+  executor.For(0, cells, 4096, measure);
+  if (executor.ShouldAbort())
+  {
+    return Status::Aborted();
+  }
+  const double largestCosineBefore = summarize(
+    this->Stats.WorstConditionBefore, this->Stats.MinDihedralBefore, this->Stats.VolumeBefore);
+  this->ConditionBound = std::min(options.MaxConditionNumber, this->Stats.WorstConditionBefore);
+  // The dihedral bound max(MinDihedralAngle, smallest of the input) as a cosine: the input's
+  // largest cosine itself, and the largest cosine whose angle is at least MinDihedralAngle
+  // (cos rounds, so it is nudged until DihedralDegrees agrees), so that comparing cosines
+  // accepts no angle that the comparison of degrees would refuse.
+  double optionCosine = std::cos(options.MinDihedralAngle * (3.14159265358979323846 / 180.0));
+  while (optionCosine > -1.0 && DihedralDegrees(optionCosine) < options.MinDihedralAngle)
+  {
+    optionCosine = std::nextafter(optionCosine, -2.0);
+  }
+  while (optionCosine < 1.0 &&
+    DihedralDegrees(std::nextafter(optionCosine, 2.0)) >= options.MinDihedralAngle)
+  {
+    optionCosine = std::nextafter(optionCosine, 2.0);
+  }
+  this->CosineBound = std::min(optionCosine, largestCosineBefore);
+  executor.ReportProgress(0.05);
+
+  // Facets: per cell, which of its facets (bit i: the facet opposite corner i) are surface
+  // facets and which are fixed outer-boundary facets.
+  std::vector<std::uint8_t> surfaceMasks(static_cast<std::size_t>(cells), 0);
+  std::vector<std::uint8_t> fixedMasks(static_cast<std::size_t>(cells), 0);
+  struct FacetKernel
+  {
+    using Scratch = NoScratch;
+    const BoundarySmoother* Self;
+    const IdType* Connectivity;
+    std::uint8_t* SurfaceMasks;
+    std::uint8_t* FixedMasks;
+    const decltype(isBackground)* IsBackground;
+    const decltype(sameMaterial)* SameMaterial;
+    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    {
+      for (std::int64_t c = begin; c < end; ++c)
+      {
+        const IdType* ids = this->Connectivity + c * Corners;
+        std::uint8_t surface = 0, fixed = 0;
+        for (int i = 0; i <= Dim; ++i)
+        {
+          // The first other cell in the intersection of the facet's points' cell lists (sorted
+          // by cell, so a merge): a few comparisons per incident cell, where testing every
+          // cell of one point for the facet's ids cost most of the setup.
+          const std::int64_t* cursor[Dim];
+          const std::int64_t* stop[Dim];
+          for (int j = 0, f = 0; j <= Dim; ++j)
+          {
+            if (j != i)
+            {
+              const auto id = static_cast<std::int64_t>(ids[j]);
+              cursor[f] = this->Self->IncidentCells.data() + this->Self->IncidentOffsets[id];
+              stop[f++] = this->Self->IncidentCells.data() + this->Self->IncidentOffsets[id + 1];
+            }
+          }
+          std::int64_t neighbour = -1;
+          for (; cursor[0] != stop[0] && neighbour < 0; ++cursor[0])
+          {
+            const std::int64_t candidate = *cursor[0];
+            bool everywhere = candidate != c;
+            for (int f = 1; f < Dim && everywhere; ++f)
+            {
+              while (cursor[f] != stop[f] && *cursor[f] < candidate)
+              {
+                ++cursor[f];
+              }
+              everywhere = cursor[f] != stop[f] && *cursor[f] == candidate;
+            }
+            neighbour = everywhere ? candidate : -1;
+          }
+          if (neighbour < 0)
+          {
+            ((*this->IsBackground)(c) ? fixed : surface) |= static_cast<std::uint8_t>(1u << i);
+          }
+          else if (!(*this->SameMaterial)(c, neighbour))
+          {
+            surface |= static_cast<std::uint8_t>(1u << i);
+          }
+        }
+        this->SurfaceMasks[c] = surface;
+        this->FixedMasks[c] = fixed;
+      }
+    }
+  };
+  FacetKernel facets{ this, connectivity, surfaceMasks.data(), fixedMasks.data(), &isBackground,
+    &sameMaterial };
+  executor.For(0, cells, 4096, facets);
+  if (executor.ShouldAbort())
+  {
+    return Status::Aborted();
+  }
+
+  // Roles, and the surface neighbours: edges of surface facets, counted with repeats, then
+  // sorted and made unique per point.
+  this->Roles.assign(static_cast<std::size_t>(numberOfPoints), Other);
+  std::vector<std::int64_t> counts(static_cast<std::size_t>(numberOfPoints) + 1, 0);
+  for (std::int64_t c = 0; c < cells; ++c)
+  {
+    const IdType* ids = connectivity + c * Corners;
+    for (int i = 0; i <= Dim; ++i)
+    {
+      for (int j = 0; j <= Dim; ++j)
+      {
+        if (j == i)
+        {
+          continue;
+        }
+        const auto id = static_cast<std::int64_t>(ids[j]);
+        if (fixedMasks[c] >> i & 1)
+        {
+          this->Roles[id] = Fixed;
+        }
+        if (surfaceMasks[c] >> i & 1)
+        {
+          this->Roles[id] = this->Roles[id] == Fixed ? Fixed : Surface;
+          counts[id + 1] += Dim - 1;
+        }
+      }
+    }
+  }
+  for (std::int64_t p = 0; p < numberOfPoints; ++p)
+  {
+    counts[p + 1] += counts[p];
+  }
+  std::vector<std::int64_t> pairs(static_cast<std::size_t>(counts.back()));
+  {
+    std::vector<std::int64_t> next(counts.begin(), counts.end() - 1);
+    for (std::int64_t c = 0; c < cells; ++c)
+    {
+      const IdType* ids = connectivity + c * Corners;
+      for (int i = 0; i <= Dim; ++i)
+      {
+        if (!(surfaceMasks[c] >> i & 1))
+        {
+          continue;
+        }
+        for (int a = 0; a <= Dim; ++a)
+        {
+          for (int b = 0; b <= Dim; ++b)
+          {
+            if (a != i && b != i && a != b)
+            {
+              pairs[next[static_cast<std::int64_t>(ids[a])]++] = static_cast<std::int64_t>(ids[b]);
+            }
+          }
+        }
+      }
+    }
+  }
+  this->SurfaceOffsets.assign(static_cast<std::size_t>(numberOfPoints) + 1, 0);
+  this->SurfaceNeighbours.clear();
+  for (std::int64_t p = 0; p < numberOfPoints; ++p)
+  {
+    auto first = pairs.begin() + counts[p], last = pairs.begin() + counts[p + 1];
+    std::sort(first, last);
+    last = std::unique(first, last);
+    this->SurfaceNeighbours.insert(this->SurfaceNeighbours.end(), first, last);
+    this->SurfaceOffsets[p + 1] = static_cast<std::int64_t>(this->SurfaceNeighbours.size());
+  }
+  std::vector<std::int64_t>().swap(pairs);
+  std::vector<std::int64_t>().swap(counts);
+
+  // Interior layers by edge hops from the surface.
+  std::vector<std::int64_t> frontier;
+  for (std::int64_t p = 0; p < numberOfPoints; ++p)
+  {
+    if (this->Roles[p] == Surface)
+    {
+      frontier.push_back(p);
+    }
+  }
+  for (int layer = 0; layer < options.NumberOfInteriorLayers && !frontier.empty(); ++layer)
+  {
+    std::vector<std::int64_t> next;
+    for (const std::int64_t p : frontier)
+    {
+      for (std::int64_t k = this->IncidentOffsets[p]; k < this->IncidentOffsets[p + 1]; ++k)
+      {
+        const IdType* ids = connectivity + this->IncidentCells[k] * Corners;
+        for (int v = 0; v <= Dim; ++v)
+        {
+          const auto id = static_cast<std::int64_t>(ids[v]);
+          if (this->Roles[id] == Other)
+          {
+            this->Roles[id] = InteriorLayer;
+            next.push_back(id);
+          }
+        }
+      }
+    }
+    frontier.swap(next);
+  }
+
+  // Edge neighbours of the interior-layer points (their Laplacian targets), sorted by id, once:
+  // gathering and sorting them from the incident cells at every pass cost more than the moves.
+  // Counted in parallel, then filled in parallel at the counted offsets.
+  struct EdgeKernel
+  {
+    using Scratch = typename BoundarySmoother::Scratch;
+    BoundarySmoother* Self;
+    const IdType* Connectivity;
+    bool Fill;
+    void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
+    {
+      BoundarySmoother& self = *this->Self;
+      for (std::int64_t p = begin; p < end; ++p)
+      {
+        if (self.Roles[p] != InteriorLayer)
+        {
+          continue;
+        }
+        scratch.Ids.clear();
+        for (std::int64_t k = self.IncidentOffsets[p]; k < self.IncidentOffsets[p + 1]; ++k)
+        {
+          const IdType* ids = this->Connectivity + self.IncidentCells[k] * Corners;
+          for (int v = 0; v <= Dim; ++v)
+          {
+            if (static_cast<std::int64_t>(ids[v]) != p)
+            {
+              scratch.Ids.push_back(static_cast<std::int64_t>(ids[v]));
+            }
+          }
+        }
+        std::sort(scratch.Ids.begin(), scratch.Ids.end());
+        scratch.Ids.erase(std::unique(scratch.Ids.begin(), scratch.Ids.end()), scratch.Ids.end());
+        if (this->Fill)
+        {
+          std::copy(scratch.Ids.begin(), scratch.Ids.end(),
+            self.EdgeNeighbours.begin() + self.EdgeOffsets[p]);
+        }
+        else
+        {
+          self.EdgeOffsets[p + 1] = static_cast<std::int64_t>(scratch.Ids.size());
+        }
+      }
+    }
+  };
+  this->EdgeOffsets.assign(static_cast<std::size_t>(numberOfPoints) + 1, 0);
+  EdgeKernel edges{ this, connectivity, false };
+  executor.For(0, numberOfPoints, 4096, edges);
+  for (std::int64_t p = 0; p < numberOfPoints; ++p)
+  {
+    this->EdgeOffsets[p + 1] += this->EdgeOffsets[p];
+  }
+  this->EdgeNeighbours.assign(static_cast<std::size_t>(this->EdgeOffsets.back()), 0);
+  edges.Fill = true;
+  executor.For(0, numberOfPoints, 4096, edges);
+  if (executor.ShouldAbort())
+  {
+    return Status::Aborted();
+  }
+
+  // Greedy colouring of the movable points in point order.
+  std::vector<std::int32_t> colours(static_cast<std::size_t>(numberOfPoints), -1);
+  std::vector<std::vector<std::int64_t>> surfaceByColour, interiorByColour;
+  {
+    std::vector<char> used;
+    for (std::int64_t p = 0; p < numberOfPoints; ++p)
+    {
+      const std::uint8_t role = this->Roles[p];
+      if (role == Other || role == Fixed)
+      {
+        this->Stats.FixedPoints += role == Fixed;
+        continue;
+      }
+      used.assign(used.size(), 0);
+      for (std::int64_t k = this->IncidentOffsets[p]; k < this->IncidentOffsets[p + 1]; ++k)
+      {
+        const IdType* ids = connectivity + this->IncidentCells[k] * Corners;
+        for (int v = 0; v <= Dim; ++v)
+        {
+          const std::int32_t colour = colours[static_cast<std::int64_t>(ids[v])];
+          if (colour >= 0)
+          {
+            used[colour] = 1;
+          }
+        }
+      }
+      const auto free = std::find(used.begin(), used.end(), 0);
+      const auto colour = static_cast<std::int32_t>(free - used.begin());
+      if (free == used.end())
+      {
+        used.push_back(0);
+        surfaceByColour.emplace_back();
+        interiorByColour.emplace_back();
+      }
+      colours[p] = colour;
+      (role == Surface ? surfaceByColour : interiorByColour)[colour].push_back(p);
+      (role == Surface ? this->Stats.SurfacePoints : this->Stats.InteriorLayerPoints) += 1;
+    }
+    this->Stats.NumberOfColours = static_cast<int>(used.size());
+  }
+  if (executor.ShouldAbort())
+  {
+    return Status::Aborted();
+  }
+  executor.ReportProgress(0.1);
+
+  // The iterations.
+  this->Original.assign(points, points + numberOfPoints * Dim);
+  this->Targets.assign(points, points + numberOfPoints * Dim);
+  this->Composed.assign(
+    options.Method == SmoothingMethod::Taubin ? this->Targets.size() : std::size_t{ 0 }, 0.0);
+  const double lambda = options.RelaxationFactor;
+  const double mu = TaubinMu(lambda, options.PassBand);
+  constexpr bool project = !std::is_same<std::decay_t<Projector>, NoProjection>::value;
+  for (int iteration = 0; iteration < options.NumberOfIterations; ++iteration)
+  {
+    const bool taubin = options.Method == SmoothingMethod::Taubin;
+    status = this->Step(
+      surfaceByColour, true, lambda, taubin ? mu : 0.0, connectivity, projector, project, executor);
+    if (status.IsOk() && options.NumberOfInteriorLayers > 0)
+    {
+      status =
+        this->Step(interiorByColour, false, lambda, 0.0, connectivity, projector, false, executor);
+    }
+    if (!status.IsOk())
+    {
+      return status;
+    }
+    executor.ReportProgress(0.1 + 0.85 * (iteration + 1) / options.NumberOfIterations);
+  }
+
+  measure.First = false;
+  executor.For(0, cells, 4096, measure);
+  if (executor.ShouldAbort())
+  {
+    return Status::Aborted();
+  }
+  summarize(this->Stats.WorstConditionAfter, this->Stats.MinDihedralAfter, this->Stats.VolumeAfter);
+  for (std::int64_t p = 0; p < numberOfPoints; ++p)
+  {
+    bool moved = false;
+    for (int c = 0; c < Dim; ++c)
+    {
+      moved = moved || points[p * Dim + c] != this->Original[p * Dim + c];
+    }
+    this->Stats.MovedPoints += moved;
+  }
+  this->Stats.AcceptedMoves = this->Accepted;
+  this->Stats.ReducedMoves = this->Reduced;
+  this->Stats.RejectedMoves = this->Rejected;
+  std::vector<double>().swap(this->Targets);
+  std::vector<double>().swap(this->Composed);
+  std::vector<double>().swap(this->Original);
+  std::vector<std::int64_t>().swap(this->EdgeOffsets);
+  std::vector<std::int64_t>().swap(this->EdgeNeighbours);
+  executor.ReportProgress(1.0);
+  return Status::Ok();
+}
+
+template <int Dim>
+template <class IdType, class Projector, class Executor>
+Status BoundarySmoother<Dim>::Step(const std::vector<std::vector<std::int64_t>>& byColour,
+  bool surface, double lambda, double mu, const IdType* connectivity, Projector& projector,
+  bool project, Executor& executor)
+{
+  constexpr std::int64_t Corners = Dim + 1;
+  // Jacobi: every target from the positions before this step (Source), into Destination.
+  struct TargetKernel
+  {
+    using Scratch = NoScratch;
+    BoundarySmoother* Self;
+    const std::vector<std::int64_t>* Points;
+    const IdType* Connectivity;
+    bool Surface;
+    double Factor;
+    const double* Source;
+    double* Destination;
+    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    {
+      const double* x = this->Source;
+      for (std::int64_t i = begin; i < end; ++i)
+      {
+        const std::int64_t p = (*this->Points)[i];
+        const std::int64_t* neighbours = nullptr;
+        std::int64_t count = 0;
+        if (this->Surface)
+        {
+          neighbours = this->Self->SurfaceNeighbours.data() + this->Self->SurfaceOffsets[p];
+          count = this->Self->SurfaceOffsets[p + 1] - this->Self->SurfaceOffsets[p];
+        }
+        else
+        {
+          neighbours = this->Self->EdgeNeighbours.data() + this->Self->EdgeOffsets[p];
+          count = this->Self->EdgeOffsets[p + 1] - this->Self->EdgeOffsets[p];
+        }
+        double* target = this->Destination + p * Dim;
+        if (count == 0)
+        {
+          for (int c = 0; c < Dim; ++c)
+          {
+            target[c] = x[p * Dim + c];
+          }
+          continue;
+        }
+        for (int c = 0; c < Dim; ++c)
+        {
+          double sum = 0.0;
+          for (std::int64_t k = 0; k < count; ++k)
+          {
+            sum += x[neighbours[k] * Dim + c];
+          }
+          target[c] = x[p * Dim + c] + this->Factor * (sum / count - x[p * Dim + c]);
+        }
+      }
+    }
+  };
+  // Validated moves of the points of one colour.
+  struct MoveKernel
+  {
+    using Scratch = typename BoundarySmoother::Scratch;
+    BoundarySmoother* Self;
+    const std::vector<std::int64_t>* Points;
+    const IdType* Connectivity;
+    Projector* Project;
+    bool UseProjector;
+    const double* Targets;
+    Executor* Exec;
+    void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
+    {
+      BoundarySmoother& self = *this->Self;
+      const BoundarySmoothOptions& options = self.Options;
+      if (this->Exec->ShouldAbort())
+      {
+        return;
+      }
+      std::int64_t accepted = 0, reduced = 0, rejected = 0;
+      for (std::int64_t i = begin; i < end; ++i)
+      {
+        const std::int64_t p = (*this->Points)[i];
+        double* x = self.Points + p * Dim;
+        const double* target = this->Targets + p * Dim;
+        if (std::equal(x, x + Dim, target))
+        {
+          continue;
+        }
+        const std::int64_t first = self.IncidentOffsets[p], last = self.IncidentOffsets[p + 1];
+        double oldWorst = 0.0, oldLargestCosine = -1.0;
+        for (std::int64_t k = first; k < last; ++k)
+        {
+          const Shape& old = self.Shapes[self.IncidentCells[k]];
+          oldWorst = std::max(oldWorst, old.Condition);
+          oldLargestCosine = std::max(oldLargestCosine, old.Cosine);
+        }
+        const double conditionLimit = std::max(oldWorst, self.ConditionBound);
+        const double cosineLimit = std::max(oldLargestCosine, self.CosineBound);
+        bool done = false;
+        for (int attempt = 0; attempt < 3 && !done; ++attempt)
+        {
+          const double fraction = attempt == 0 ? 1.0 : attempt == 1 ? 0.5 : 0.25;
+          double tentative[Dim];
+          for (int c = 0; c < Dim; ++c)
+          {
+            tentative[c] = x[c] + fraction * (target[c] - x[c]);
+          }
+          if (options.MaxDisplacement > 0.0)
+          {
+            const double* original = self.Original.data() + p * Dim;
+            double squared = 0.0;
+            for (int c = 0; c < Dim; ++c)
+            {
+              squared += (tentative[c] - original[c]) * (tentative[c] - original[c]);
+            }
+            if (squared > options.MaxDisplacement * options.MaxDisplacement)
+            {
+              const double scale = options.MaxDisplacement / std::sqrt(squared);
+              for (int c = 0; c < Dim; ++c)
+              {
+                tentative[c] = original[c] + scale * (tentative[c] - original[c]);
+              }
+            }
+          }
+          if (this->UseProjector && !(*this->Project)(p, static_cast<double*>(tentative)))
+          {
+            continue;
+          }
+          if (options.SinglePrecision)
+          {
+            for (int c = 0; c < Dim; ++c)
+            {
+              tentative[c] = static_cast<double>(static_cast<float>(tentative[c]));
+            }
+          }
+          if (std::equal(x, x + Dim, static_cast<const double*>(tentative)))
+          {
+            continue;
+          }
+          scratch.Shapes.clear();
+          bool valid = true;
+          for (std::int64_t k = first; k < last && valid; ++k)
+          {
+            const std::int64_t cell = self.IncidentCells[k];
+            const double* corners[Dim + 1];
+            self.CellCorners(this->Connectivity + cell * Corners, cell, p, tentative, corners);
+            // Most cells are well within the bounds, which a test without roots or divisions
+            // shows; a cached figure is only ever used through max(figure, bound), so such a
+            // cell is cached as (0, -1), which stands for any figure within the bounds.
+            if (SimplexSurelyWithin<Dim>(corners, self.ConditionBound, self.CosineBound))
+            {
+              scratch.Shapes.push_back({ 0.0, -1.0 });
+              continue;
+            }
+            const SimplexCosines shape = MeasureSimplexCosines<Dim>(corners);
+            valid = shape.Determinant > 0.0 && shape.Condition <= conditionLimit &&
+              shape.LargestDihedralCosine <= cosineLimit;
+            scratch.Shapes.push_back({ shape.Condition, shape.LargestDihedralCosine });
+          }
+          if (!valid)
+          {
+            continue;
+          }
+          for (int c = 0; c < Dim; ++c)
+          {
+            x[c] = tentative[c];
+          }
+          for (std::int64_t k = first; k < last; ++k)
+          {
+            self.Shapes[self.IncidentCells[k]] = scratch.Shapes[k - first];
+          }
+          (attempt == 0 ? accepted : reduced) += 1;
+          done = true;
+        }
+        rejected += !done;
+      }
+      self.Accepted += accepted;
+      self.Reduced += reduced;
+      self.Rejected += rejected;
+    }
+  };
+
+  std::vector<std::int64_t> all;
+  for (const auto& points : byColour)
+  {
+    all.insert(all.end(), points.begin(), points.end());
+  }
+  // Points outside the step keep Targets equal to their position (they never move or were
+  // reset below), so the mu pass reads the lambda targets of neighbours in the step and the
+  // positions of the others.
+  TargetKernel targets{ this, &all, connectivity, surface, lambda, this->Points,
+    this->Targets.data() };
+  executor.For(0, static_cast<std::int64_t>(all.size()), 1024, targets);
+  const double* finalTargets = this->Targets.data();
+  if (mu != 0.0)
+  {
+    TargetKernel composed{ this, &all, connectivity, surface, mu, this->Targets.data(),
+      this->Composed.data() };
+    executor.For(0, static_cast<std::int64_t>(all.size()), 1024, composed);
+    finalTargets = this->Composed.data();
+  }
+  for (const auto& points : byColour)
+  {
+    if (executor.ShouldAbort())
+    {
+      return Status::Aborted();
+    }
+    MoveKernel move{ this, &points, connectivity, &projector, project && surface, finalTargets,
+      &executor };
+    executor.For(0, static_cast<std::int64_t>(points.size()), 256, move);
+  }
+  // Back to "the target of a point outside a step is its position" for the next step.
+  for (const std::int64_t p : all)
+  {
+    std::copy(this->Points + p * Dim, this->Points + (p + 1) * Dim, this->Targets.data() + p * Dim);
+  }
+  return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
+}
+
+} // namespace stm
+
+#endif

@@ -1,0 +1,194 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @class   stmBoundarySmooth
+ * @brief   smooths the boundary and the material interfaces of a tetrahedral (triangle) mesh,
+ *          then a few interior layers, rejecting moves that cost element quality
+ *
+ * stmBoundarySmooth is the paper's boundary smoothing (section 3.4) with the volumetric
+ * Laplacian smoothing near the boundary of its section 4. Surface points (on facets shared by
+ * cells of different "Material", or on the outer boundary of a cell that is not
+ * BackgroundMaterial) move toward the centroid of their surface neighbours: TAUBIN (lambda|mu,
+ * the default, which does not shrink) or LAPLACIAN with the damping RelaxationFactor (which
+ * does). Points on the outer boundary of BackgroundMaterial cells (the box of background around
+ * the body) stay fixed. After each surface iteration, NumberOfInteriorLayers rings of interior
+ * points next to the surface get one volumetric Laplacian pass. Every move is validated: it
+ * must keep every incident cell's orientation and keep the worst condition number and the
+ * smallest dihedral angle around the point within MaxConditionNumber / MinDihedralAngle (or no
+ * worse than before, where they already were); else it is tried at half and a quarter of its
+ * length, else the point stays. The worst element of the mesh therefore never gets worse.
+ * Optionally, moves are limited to MaxDisplacement from the original position, and surface
+ * points are projected onto the zero level of ImplicitFunction (ProjectToFunction).
+ *
+ * Input: a vtkUnstructuredGrid of only tetrahedra (3D) or only triangles in a plane (2D), e.g.
+ * the output of stmMarchingSimplices, with the cell array "Material" (without it, every cell is
+ * one material that is not the background). Output: the same cells and arrays with the points
+ * moved (same precision as the input points) and the point array "SmoothingDisplacement" (3
+ * components). Point arrays such as "SeparatingFunction" are passed unchanged, not
+ * re-evaluated. The result does not depend on the number of threads (see
+ * Filters/Core/Smooth/BoundarySmooth.h for the method and its decisions).
+ *
+ * @sa stmMarchingSimplices stmSeparatingFunction
+ */
+
+#ifndef stmBoundarySmooth_h
+#define stmBoundarySmooth_h
+
+#include "SpacetreeMeshFiltersModule.h" // for export macro
+#include "vtkUnstructuredGridAlgorithm.h"
+
+class vtkImplicitFunction;
+
+class SPACETREEMESHFILTERS_EXPORT stmBoundarySmooth : public vtkUnstructuredGridAlgorithm
+{
+public:
+  static stmBoundarySmooth* New();
+  vtkTypeMacro(stmBoundarySmooth, vtkUnstructuredGridAlgorithm);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  enum Methods
+  {
+    /// lambda|mu smoothing (Taubin 1995): no shrinking.
+    TAUBIN = 0,
+    /// Laplacian smoothing with damping (the paper's): shrinks convex bodies.
+    LAPLACIAN = 1
+  };
+
+  ///@{
+  /**
+   * Surface iterations (a Taubin iteration is a lambda and a mu step), in [0, 1000]. Default 20.
+   */
+  vtkSetClampMacro(NumberOfIterations, int, 0, 1000);
+  vtkGetMacro(NumberOfIterations, int);
+  ///@}
+
+  ///@{
+  /**
+   * TAUBIN (the default) or LAPLACIAN.
+   */
+  vtkSetClampMacro(Method, int, TAUBIN, LAPLACIAN);
+  vtkGetMacro(Method, int);
+  ///@}
+
+  ///@{
+  /**
+   * lambda: the fraction of the way to the neighbours' centroid a point moves per step, in
+   * (0, 1]. Default 0.5. Values outside are an error at update time.
+   */
+  vtkSetMacro(RelaxationFactor, double);
+  vtkGetMacro(RelaxationFactor, double);
+  ///@}
+
+  ///@{
+  /**
+   * Taubin's pass band k in (0, 1): 1 / mu = k - 1 / lambda. Default 0.1. Values outside are an
+   * error at update time.
+   */
+  vtkSetMacro(PassBand, double);
+  vtkGetMacro(PassBand, double);
+  ///@}
+
+  ///@{
+  /**
+   * Largest distance of a point from its input position, in the mesh's units; 0 (the default)
+   * means unlimited.
+   */
+  vtkSetClampMacro(MaxDisplacement, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(MaxDisplacement, double);
+  ///@}
+
+  ///@{
+  /**
+   * Rings of interior points next to the surface smoothed after each surface iteration, in
+   * [0, 10]. Default 2.
+   */
+  vtkSetClampMacro(NumberOfInteriorLayers, int, 0, 10);
+  vtkGetMacro(NumberOfInteriorLayers, int);
+  ///@}
+
+  ///@{
+  /**
+   * A move may not make the worst condition number (Verdict's, 1 for the regular simplex) of
+   * the cells around the point exceed this, unless they already did (then: no worse), nor the
+   * input's worst. >= 1; default 3.5.
+   */
+  vtkSetMacro(MaxConditionNumber, double);
+  vtkGetMacro(MaxConditionNumber, double);
+  ///@}
+
+  ///@{
+  /**
+   * A move may not make the smallest dihedral angle (the smallest angle of triangles) of the
+   * cells around the point fall below this, unless it already did (then: no smaller), nor below
+   * the input's smallest. Degrees in [0, 180); default 15.
+   */
+  vtkSetMacro(MinDihedralAngle, double);
+  vtkGetMacro(MinDihedralAngle, double);
+  ///@}
+
+  ///@{
+  /**
+   * The "Material" of the background: its cells' outer-boundary points stay fixed and its
+   * outer-boundary facets are no surface. Default 0.
+   */
+  vtkSetMacro(BackgroundMaterial, int);
+  vtkGetMacro(BackgroundMaterial, int);
+  ///@}
+
+  ///@{
+  /**
+   * Whether each tentative surface position is projected onto the zero level of
+   * ImplicitFunction (Newton steps along its gradient) before the validation. Default off.
+   */
+  vtkSetMacro(ProjectToFunction, bool);
+  vtkGetMacro(ProjectToFunction, bool);
+  vtkBooleanMacro(ProjectToFunction, bool);
+  ///@}
+
+  ///@{
+  /**
+   * The function of ProjectToFunction, negative inside (e.g. the vtkSphere given to
+   * stmSeparatingFunction). Required when ProjectToFunction is on. Default none.
+   */
+  void SetImplicitFunction(vtkImplicitFunction* function);
+  vtkGetObjectMacro(ImplicitFunction, vtkImplicitFunction);
+  ///@}
+
+  /**
+   * Results of the last update: points whose position changed, and moves rejected (the point
+   * stayed, after the half and quarter moves were rejected too).
+   */
+  vtkGetMacro(NumberOfMovedPoints, vtkIdType);
+  vtkGetMacro(NumberOfRejectedMoves, vtkIdType);
+
+  /**
+   * Also the implicit function's modification time.
+   */
+  vtkMTimeType GetMTime() override;
+
+protected:
+  stmBoundarySmooth();
+  ~stmBoundarySmooth() override;
+
+  int RequestData(vtkInformation* request, vtkInformationVector** inputVector,
+    vtkInformationVector* outputVector) override;
+
+private:
+  stmBoundarySmooth(const stmBoundarySmooth&) = delete;
+  void operator=(const stmBoundarySmooth&) = delete;
+
+  int NumberOfIterations = 20;
+  int Method = TAUBIN;
+  double RelaxationFactor = 0.5;
+  double PassBand = 0.1;
+  double MaxDisplacement = 0.0;
+  int NumberOfInteriorLayers = 2;
+  double MaxConditionNumber = 3.5;
+  double MinDihedralAngle = 15.0;
+  int BackgroundMaterial = 0;
+  bool ProjectToFunction = false;
+  vtkImplicitFunction* ImplicitFunction = nullptr;
+  vtkIdType NumberOfMovedPoints = 0;
+  vtkIdType NumberOfRejectedMoves = 0;
+};
+
+#endif

@@ -1,0 +1,81 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @brief   the input checks shared by the filters that work on a separating function of a
+ *          simplicial mesh (private to the module)
+ *
+ * stmMarchingSimplices and stmVertexSnap accept the same meshes (only tetrahedra or only
+ * triangles) and find the separating function the same way, so that a pipeline that works with
+ * one works with the other.
+ */
+
+#ifndef stmCutInput_h
+#define stmCutInput_h
+
+#include "vtkCellType.h"
+#include "vtkDataArray.h"
+#include "vtkDataObject.h"
+#include "vtkPointData.h"
+#include "vtkUnsignedCharArray.h"
+#include "vtkUnstructuredGrid.h"
+
+#include <string>
+
+namespace stmCutInput
+{
+/// The dimension of a mesh of only tetrahedra (3) or only triangles (2); 0 otherwise, with the
+/// offending cell type. The mesh must have cells.
+inline int SimplexDimension(vtkUnstructuredGrid* input, int& offendingType)
+{
+  vtkUnsignedCharArray* types = input->GetCellTypesArray();
+  const vtkIdType cells = input->GetNumberOfCells();
+  const unsigned char first = types->GetValue(0);
+  offendingType = first;
+  if (first != VTK_TETRA && first != VTK_TRIANGLE)
+  {
+    return 0;
+  }
+  for (vtkIdType c = 1; c < cells; ++c)
+  {
+    if (types->GetValue(c) != first)
+    {
+      offendingType = types->GetValue(c);
+      return 0;
+    }
+  }
+  return first == VTK_TETRA ? 3 : 2;
+}
+
+/// The separating function: `selected` and `association` as GetInputArrayToProcess(0, ...)
+/// returned them, `name` the selection's FIELD_NAME. When the selection names no array (a
+/// script that created the filter before its input had data), the point array
+/// "SeparatingFunction" of the stage before, else the active point scalars. Null with `error`
+/// set when there is none or it is not a point scalar.
+inline vtkDataArray* FindSeparatingFunction(vtkDataArray* selected, int association,
+  const char* name, vtkUnstructuredGrid* input, std::string& error)
+{
+  vtkDataArray* function = selected;
+  if (!function && (!name || !*name))
+  {
+    function = input->GetPointData()->GetArray("SeparatingFunction");
+    function = function ? function : input->GetPointData()->GetScalars();
+    association = vtkDataObject::FIELD_ASSOCIATION_POINTS;
+  }
+  if (!function || association != vtkDataObject::FIELD_ASSOCIATION_POINTS)
+  {
+    error = std::string("no point array '") + (name ? name : "") +
+      "' to use as the separating function; compute one (Spacetree Tessellate, Separating "
+      "Function) or select an existing point array";
+    return nullptr;
+  }
+  if (function->GetNumberOfComponents() != 1)
+  {
+    error = std::string("the separating function '") +
+      (function->GetName() ? function->GetName() : "") + "' has " +
+      std::to_string(function->GetNumberOfComponents()) + " components; it must be a scalar";
+    return nullptr;
+  }
+  return function;
+}
+} // namespace stmCutInput
+
+#endif

@@ -1,0 +1,127 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "stmSurfaceFunction.h"
+
+#include "stmFunctionValues.h"
+
+#include "vtkDataArray.h"
+#include "vtkImageData.h"
+#include "vtkImplicitFunction.h"
+#include "vtkMatrix4x4.h"
+#include "vtkPointData.h"
+
+#include <algorithm>
+#include <cmath>
+
+void stmSurfaceFunction::SetImplicitFunction(vtkImplicitFunction* function)
+{
+  this->Implicit = function;
+  this->Gray.clear();
+}
+
+bool stmSurfaceFunction::SetGrayImage(
+  vtkImageData* image, double threshold, bool insideAboveThreshold, std::string& error)
+{
+  this->Implicit = nullptr;
+  vtkDataArray* scalars = image->GetPointData()->GetScalars();
+  if (!scalars)
+  {
+    error = "the gray image has no point scalars";
+    return false;
+  }
+  image->GetDimensions(this->Dimensions);
+  if (static_cast<vtkIdType>(this->Dimensions[0]) * this->Dimensions[1] * this->Dimensions[2] == 0)
+  {
+    error = "the gray image is empty";
+    return false;
+  }
+  // f is computed in place, so a double array the image owns is copied once, anything else
+  // converted once.
+  if (scalars->GetNumberOfComponents() == 1)
+  {
+    const double* values = stmFunctionValues::AsDoubles(scalars, this->Gray);
+    if (values != this->Gray.data())
+    {
+      this->Gray.assign(values, values + scalars->GetNumberOfTuples());
+    }
+  }
+  else
+  {
+    this->Gray.resize(static_cast<std::size_t>(scalars->GetNumberOfTuples()));
+    for (vtkIdType i = 0; i < scalars->GetNumberOfTuples(); ++i)
+    {
+      this->Gray[i] = scalars->GetComponent(i, 0);
+    }
+  }
+  const double sign = insideAboveThreshold ? -1.0 : 1.0;
+  double outside = 1.0;
+  for (double& value : this->Gray)
+  {
+    value = sign * (value - threshold);
+    if (std::isfinite(value))
+    {
+      outside = std::max(outside, value);
+    }
+  }
+  this->Field =
+    stm::VoxelField<3, double>{ { this->Dimensions[0], this->Dimensions[1], this->Dimensions[2] },
+      this->Gray.data(), outside };
+  vtkMatrix4x4* matrix = image->GetPhysicalToIndexMatrix();
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int c = 0; c < 4; ++c)
+    {
+      this->PhysicalToIndex[r][c] = matrix->GetElement(r, c);
+    }
+  }
+  return true;
+}
+
+void stmSurfaceFunction::VoxelPosition(const double x[3], double position[3]) const
+{
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    const double* row = this->PhysicalToIndex[axis];
+    const double index = row[0] * x[0] + row[1] * x[1] + row[2] * x[2] + row[3];
+    position[axis] = this->Dimensions[axis] == 1 ? 0.5 : index + 0.5;
+  }
+}
+
+double stmSurfaceFunction::Evaluate(const double x[3]) const
+{
+  if (this->Implicit)
+  {
+    std::lock_guard<std::mutex> lock(this->ImplicitLock);
+    double point[3] = { x[0], x[1], x[2] };
+    return this->Implicit->FunctionValue(point);
+  }
+  double position[3];
+  this->VoxelPosition(x, position);
+  return this->Field.Sample(position);
+}
+
+double stmSurfaceFunction::EvaluateWithGradient(const double x[3], double gradient[3]) const
+{
+  if (this->Implicit)
+  {
+    std::lock_guard<std::mutex> lock(this->ImplicitLock);
+    double point[3] = { x[0], x[1], x[2] };
+    this->Implicit->FunctionGradient(point, gradient);
+    return this->Implicit->FunctionValue(point);
+  }
+  double position[3], voxelGradient[3];
+  this->VoxelPosition(x, position);
+  const double value = this->Field.SampleWithGradient(position, voxelGradient);
+  // Chain rule through the affine physical -> index map; flat axes do not vary.
+  for (int c = 0; c < 3; ++c)
+  {
+    gradient[c] = 0.0;
+    for (int axis = 0; axis < 3; ++axis)
+    {
+      if (this->Dimensions[axis] != 1)
+      {
+        gradient[c] += voxelGradient[axis] * this->PhysicalToIndex[axis][c];
+      }
+    }
+  }
+  return value;
+}

@@ -1,0 +1,61 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @class   stmSurfaceFunction
+ * @brief   a separating function that can be evaluated anywhere, with its gradient: an implicit
+ *          function, or a gray image against a threshold (private to the module)
+ *
+ * stmSeparatingFunction samples it at the mesh points; stmVertexSnap projects snapped vertices
+ * onto its zero set along the gradient. The gray image convention is the one of
+ * stmSeparatingFunction: f = gray - threshold, negated when the inside is above the threshold,
+ * the gray values (voxel values at the image points) interpolated trilinearly in the image's
+ * physical space, a point beyond the image getting the most "outside" value.
+ *
+ * Evaluation is thread-safe: the gray image is read only, and the implicit function (not
+ * documented as thread-safe in VTK) is evaluated under a lock.
+ */
+
+#ifndef stmSurfaceFunction_h
+#define stmSurfaceFunction_h
+
+#include "Cut/SeparatingFunction.h"
+
+#include "vtkSmartPointer.h"
+
+#include <mutex>
+#include <string>
+#include <vector>
+
+class vtkImageData;
+class vtkImplicitFunction;
+
+class stmSurfaceFunction
+{
+public:
+  /// Uses an implicit function, evaluated in physical coordinates.
+  void SetImplicitFunction(vtkImplicitFunction* function);
+
+  /// Uses the gray image's active point scalars (first component). False with `error` set for
+  /// an image without scalars or without voxels.
+  bool SetGrayImage(
+    vtkImageData* image, double threshold, bool insideAboveThreshold, std::string& error);
+
+  /// f at a physical point.
+  double Evaluate(const double x[3]) const;
+
+  /// f at a physical point and its gradient in physical coordinates.
+  double EvaluateWithGradient(const double x[3], double gradient[3]) const;
+
+private:
+  /// The continuous voxel position of a physical point (0 at the outer corner of the first
+  /// voxel); flat axes, which have one sample, at their only voxel.
+  void VoxelPosition(const double x[3], double position[3]) const;
+
+  vtkSmartPointer<vtkImplicitFunction> Implicit;
+  mutable std::mutex ImplicitLock;
+  std::vector<double> Gray; // signed: f at the voxels
+  stm::VoxelField<3, double> Field;
+  int Dimensions[3] = { 0, 0, 0 };
+  double PhysicalToIndex[3][4] = {};
+};
+
+#endif

@@ -1,0 +1,690 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Boundary smoothing in 2D and 3D on a ball cut by marching simplices from a uniform
+// tessellation, and on a staircase two-material ball: no inverted cell after any number of
+// iterations, Taubin keeps the volume and Laplacian shrinks it, the worst element never gets
+// worse, the background box stays bit-identical, MaxDisplacement and the projector hold, the
+// result does not depend on the threads, and the staircase gets smoother. 1D and 4D: the
+// dimension-generic code on small meshes.
+
+#include "CoreTestUtilities.h"
+
+#include "Check/MeshInvariants.h"
+#include "Check/SimplexQuality.h"
+#include "Common/Execution.h"
+#include "Cut/LevelSetProjection.h"
+#include "Cut/MarchingSimplices.h"
+#include "Smooth/BoundarySmooth.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <iostream>
+#include <map>
+#include <numeric>
+#include <vector>
+
+namespace
+{
+using namespace stmtest;
+
+constexpr double Pi = 3.14159265358979323846;
+
+template <int D>
+struct SmoothMesh
+{
+  std::vector<double> Points;
+  std::vector<std::int64_t> Cells;
+  std::vector<std::int64_t> Materials;
+  double Centre[D];
+  double Radius = 0.0;
+  std::int64_t Extent = 0;
+
+  std::int64_t NumberOfPoints() const { return static_cast<std::int64_t>(this->Points.size()) / D; }
+  std::int64_t NumberOfCells() const
+  {
+    return static_cast<std::int64_t>(this->Cells.size()) / (D + 1);
+  }
+};
+
+/// The uniform tessellation (2 triangles, 5 tetrahedra per voxel) of [0, extent]^D.
+template <int D>
+SimplicialMesh<D> UniformMesh(std::int64_t extent, const LabelImage<D>& image, bool background)
+{
+  stm::SequentialExecutor executor;
+  stm::Spacetree<D> tree;
+  EXPECT_TRUE(BuildTree<D>(image, 1, 0, false, executor, tree).IsOk());
+  stm::SpacetreeTessellationOptions options;
+  options.IncludeBackground = background;
+  options.Template = D == 4 ? stm::CellTemplate::Kuhn : stm::CellTemplate::Checkerboard;
+  SimplicialMesh<D> mesh;
+  const stm::Status status = TessellateTree<D>(tree, options, executor, mesh);
+  EXPECT_TRUE(status.IsOk()) << status.GetMessage();
+  // The uniform templates insert no point.
+  EXPECT_EQ(mesh.GetNumberOfPoints(), static_cast<std::int64_t>(std::pow(extent + 1, D)));
+  return mesh;
+}
+
+/// Cuts a uniform mesh at the zero of point values: material 1 inside, 0 (the background)
+/// outside; cells with only zero points keep the side of their material.
+template <int D>
+void CutMesh(const SimplicialMesh<D>& mesh, const std::vector<double>& values, SmoothMesh<D>& out)
+{
+  const std::vector<double> coordinates = mesh.Coordinates();
+  const std::int64_t points = mesh.GetNumberOfPoints();
+  stm::SequentialExecutor executor;
+  stm::MarchingSimplices<D> cutter;
+  auto allZeroSide = [&](std::int64_t cell)
+  { return mesh.Materials[cell] == 0 ? stm::CutSide::Outside : stm::CutSide::Inside; };
+  EXPECT_TRUE(
+    cutter
+      .Classify(values.data(), points, mesh.Connectivity.data(), mesh.GetNumberOfSimplices(),
+        stm::MarchingSimplicesOptions(), allZeroSide, executor)
+      .IsOk());
+  const std::int64_t cells = cutter.GetNumberOfCells();
+  out.Cells.resize(static_cast<std::size_t>(cells * (D + 1)));
+  std::vector<std::int64_t> parents(static_cast<std::size_t>(cells));
+  std::vector<std::uint8_t> sides(static_cast<std::size_t>(cells));
+  EXPECT_TRUE(cutter
+                .WriteCells(mesh.Connectivity.data(), out.Cells.data(), parents.data(),
+                  sides.data(), executor)
+                .IsOk());
+  out.Points = coordinates;
+  for (const stm::CutEdge& edge : cutter.GetCutEdges())
+  {
+    for (int axis = 0; axis < D; ++axis)
+    {
+      out.Points.push_back(
+        (1.0 - edge.T) * coordinates[edge.A * D + axis] + edge.T * coordinates[edge.B * D + axis]);
+    }
+  }
+  for (const std::uint8_t side : sides)
+  {
+    out.Materials.push_back(side == static_cast<std::uint8_t>(stm::CutSide::Inside) ? 1 : 0);
+  }
+}
+
+/// The ball of radius `fraction` * extent around the box centre (shifted off the lattice),
+/// cut from the uniform mesh at the analytic function.
+template <int D>
+SmoothMesh<D> CutBall(std::int64_t extent, double fraction)
+{
+  LabelImage<D> image(UniformExtents<D>(extent));
+  std::fill(image.GetValues().begin(), image.GetValues().end(), stm::MaterialIndex{ 1 });
+  const SimplicialMesh<D> mesh = UniformMesh<D>(extent, image, false);
+  SmoothMesh<D> ball;
+  ball.Extent = extent;
+  ball.Radius = fraction * static_cast<double>(extent);
+  for (int axis = 0; axis < D; ++axis)
+  {
+    ball.Centre[axis] = 0.5 * static_cast<double>(extent) + 0.05 * (axis + 1);
+  }
+  const std::vector<double> coordinates = mesh.Coordinates();
+  std::vector<double> values(static_cast<std::size_t>(mesh.GetNumberOfPoints()));
+  for (std::size_t p = 0; p < values.size(); ++p)
+  {
+    double r2 = 0.0;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      r2 += (coordinates[p * D + axis] - ball.Centre[axis]) *
+        (coordinates[p * D + axis] - ball.Centre[axis]);
+    }
+    values[p] = r2 - ball.Radius * ball.Radius;
+  }
+  CutMesh<D>(mesh, values, ball);
+  return ball;
+}
+
+/// The staircase ball: voxels whose centre lies within the radius are material 1, the others
+/// the background, tessellated together (no cut).
+template <int D>
+SmoothMesh<D> StaircaseBall(std::int64_t extent, double fraction, bool labelsFunction)
+{
+  LabelImage<D> image(UniformExtents<D>(extent));
+  SmoothMesh<D> ball;
+  ball.Extent = extent;
+  ball.Radius = fraction * static_cast<double>(extent);
+  for (int axis = 0; axis < D; ++axis)
+  {
+    ball.Centre[axis] = 0.5 * static_cast<double>(extent);
+  }
+  ForEachIndex<D>(image.GetDimensions(),
+    [&](const stm::LatticeIndex<D>& voxel)
+    {
+      double r2 = 0.0;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        const double x = static_cast<double>(voxel[axis]) + 0.5 - ball.Centre[axis];
+        r2 += x * x;
+      }
+      image.Set(voxel, r2 <= ball.Radius * ball.Radius ? 1 : 0);
+    });
+  const SimplicialMesh<D> mesh = UniformMesh<D>(extent, image, true);
+  if (!labelsFunction)
+  {
+    ball.Points = mesh.Coordinates();
+    ball.Cells = mesh.Connectivity;
+    ball.Materials = mesh.MaterialsAsInt64();
+    return ball;
+  }
+  // The labels function (paper 3.1): at a voxel corner, the mean of the body indicator (-1
+  // body, +1 background) of the 2^D voxels around it.
+  std::vector<double> values(static_cast<std::size_t>(mesh.GetNumberOfPoints()));
+  for (std::size_t p = 0; p < values.size(); ++p)
+  {
+    const stm::LatticeIndex<D>& corner = mesh.HalfUnitPoints[p];
+    double sum = 0.0;
+    for (int k = 0; k < (1 << D); ++k)
+    {
+      stm::LatticeIndex<D> voxel;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        voxel[axis] = corner[axis] / 2 - ((k >> axis) & 1);
+      }
+      sum += image.At(voxel) == 1 ? -1.0 : 1.0;
+    }
+    values[p] = sum / (1 << D);
+  }
+  CutMesh<D>(mesh, values, ball);
+  return ball;
+}
+
+template <int D>
+stm::MeshInvariantReport Check(const SmoothMesh<D>& mesh)
+{
+  return stm::CheckSimplicialMesh<D>(mesh.Points, mesh.Cells, &mesh.Materials);
+}
+
+template <int D, class Executor>
+stm::BoundarySmoothStats Smooth(SmoothMesh<D>& mesh, const stm::BoundarySmoothOptions& options,
+  Executor& executor, std::vector<std::uint8_t>* roles = nullptr)
+{
+  stm::BoundarySmoother<D> smoother;
+  const stm::Status status = smoother.Smooth(mesh.Points.data(), mesh.NumberOfPoints(),
+    mesh.Cells.data(), mesh.NumberOfCells(), mesh.Materials.data(), options, executor);
+  EXPECT_TRUE(status.IsOk()) << status.GetMessage();
+  if (roles)
+  {
+    *roles = smoother.GetPointRoles();
+  }
+  return smoother.GetStats();
+}
+
+template <int D>
+stm::BoundarySmoothStats Smooth(SmoothMesh<D>& mesh, const stm::BoundarySmoothOptions& options,
+  std::vector<std::uint8_t>* roles = nullptr)
+{
+  stm::SequentialExecutor executor;
+  return Smooth<D>(mesh, options, executor, roles);
+}
+
+/// Worst condition number and smallest dihedral angle, measured independently of the stats.
+template <int D>
+std::pair<double, double> Quality(const SmoothMesh<D>& mesh)
+{
+  double worst = 0.0, smallest = 180.0;
+  for (std::int64_t c = 0; c < mesh.NumberOfCells(); ++c)
+  {
+    const double* corners[D + 1];
+    for (int v = 0; v <= D; ++v)
+    {
+      corners[v] = mesh.Points.data() + mesh.Cells[c * (D + 1) + v] * D;
+    }
+    const stm::SimplexShape<D> shape = stm::MeasureSimplex<D>(corners);
+    worst = std::max(worst, shape.Condition);
+    smallest = std::min(smallest, shape.MinDihedralDegrees);
+  }
+  return { worst, smallest };
+}
+
+/// Measure of the interface between material 1 and the rest (length in 2D, area in 3D).
+template <int D>
+double InterfaceMeasure(const SmoothMesh<D>& mesh)
+{
+  std::map<std::vector<std::int64_t>, int> facets;
+  for (std::int64_t c = 0; c < mesh.NumberOfCells(); ++c)
+  {
+    if (mesh.Materials[c] != 1)
+    {
+      continue;
+    }
+    for (int i = 0; i <= D; ++i)
+    {
+      std::vector<std::int64_t> facet;
+      for (int v = 0; v <= D; ++v)
+      {
+        if (v != i)
+        {
+          facet.push_back(mesh.Cells[c * (D + 1) + v]);
+        }
+      }
+      std::sort(facet.begin(), facet.end());
+      ++facets[facet];
+    }
+  }
+  double measure = 0.0;
+  for (const auto& facet : facets)
+  {
+    if (facet.second != 1)
+    {
+      continue;
+    }
+    const double* a = mesh.Points.data() + facet.first[0] * D;
+    const double* b = mesh.Points.data() + facet.first[1] * D;
+    if (D == 2)
+    {
+      measure += std::hypot(b[0] - a[0], b[1] - a[1]);
+    }
+    else
+    {
+      const double* c = mesh.Points.data() + facet.first[2] * D;
+      const double u[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+      const double w[3] = { c[0] - a[0], c[1] - a[1], c[2] - a[2] };
+      const double n[3] = { u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+        u[0] * w[1] - u[1] * w[0] };
+      measure += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    }
+  }
+  return measure;
+}
+
+template <int D>
+double SphereMeasure(double radius)
+{
+  return D == 2 ? 2.0 * Pi * radius : 4.0 * Pi * radius * radius;
+}
+
+template <int D>
+std::int64_t Extent()
+{
+  return D == 2 ? 32 : 20;
+}
+
+template <class T>
+class BoundarySmoothTest : public ::testing::Test
+{
+};
+using SmoothDimensions = ::testing::Types<Dim<2>, Dim<3>>;
+TYPED_TEST_SUITE(BoundarySmoothTest, SmoothDimensions);
+
+// No inverted cell after any iteration count, for both methods; the box's volume (the sum of
+// all cells) is kept, and the worst element is never worse than the input's.
+TYPED_TEST(BoundarySmoothTest, NoInvertedCellAndNoWorseElementAfterAnyIterationCount)
+{
+  constexpr int D = TypeParam::value;
+  const SmoothMesh<D> input = CutBall<D>(Extent<D>(), 0.35);
+  const stm::MeshInvariantReport before = Check<D>(input);
+  ASSERT_TRUE(before.IsValid()) << before.Summary();
+  const auto qualityBefore = Quality<D>(input);
+  for (const auto method : { stm::SmoothingMethod::Taubin, stm::SmoothingMethod::Laplacian })
+  {
+    for (const int iterations : { 1, 2, 5, 20, 40 })
+    {
+      SmoothMesh<D> mesh = input;
+      stm::BoundarySmoothOptions options;
+      options.Method = method;
+      options.NumberOfIterations = iterations;
+      const stm::BoundarySmoothStats stats = Smooth<D>(mesh, options);
+      const stm::MeshInvariantReport report = Check<D>(mesh);
+      EXPECT_TRUE(report.IsValid()) << iterations << " iterations: " << report.Summary();
+      EXPECT_GT(report.MinimumVolume, 0.0);
+      EXPECT_NEAR(report.TotalVolume, before.TotalVolume, 1e-9 * before.TotalVolume);
+      const auto quality = Quality<D>(mesh);
+      EXPECT_LE(quality.first, qualityBefore.first) << iterations << " iterations";
+      EXPECT_GE(quality.second, qualityBefore.second) << iterations << " iterations";
+      EXPECT_EQ(stats.WorstConditionBefore, qualityBefore.first);
+      EXPECT_EQ(stats.WorstConditionAfter, quality.first);
+      EXPECT_EQ(stats.MinDihedralAfter, quality.second);
+      EXPECT_GT(stats.MovedPoints, 0);
+      EXPECT_EQ(stats.SurfacePoints + stats.FixedPoints + stats.InteriorLayerPoints <=
+          mesh.NumberOfPoints(),
+        true);
+    }
+  }
+}
+
+// The ball after 20 iterations: Taubin keeps the inside volume within 0.5%, Laplacian shrinks
+// it by clearly more.
+TYPED_TEST(BoundarySmoothTest, TaubinKeepsTheVolumeAndLaplacianShrinksIt)
+{
+  constexpr int D = TypeParam::value;
+  const SmoothMesh<D> input = CutBall<D>(Extent<D>(), 0.35);
+  const double inside = Check<D>(input).VolumePerMaterial.at(1);
+  SmoothMesh<D> taubin = input, laplacian = input;
+  stm::BoundarySmoothOptions options;
+  const stm::BoundarySmoothStats taubinStats = Smooth<D>(taubin, options);
+  options.Method = stm::SmoothingMethod::Laplacian;
+  const stm::BoundarySmoothStats laplacianStats = Smooth<D>(laplacian, options);
+  const double taubinInside = Check<D>(taubin).VolumePerMaterial.at(1);
+  const double laplacianInside = Check<D>(laplacian).VolumePerMaterial.at(1);
+  EXPECT_NEAR(taubinStats.VolumeAfter.at(1), taubinInside, 1e-9 * inside);
+  EXPECT_NEAR(taubinStats.VolumeBefore.at(1), inside, 1e-9 * inside);
+  const double taubinChange = (taubinInside - inside) / inside;
+  const double laplacianChange = (laplacianInside - inside) / inside;
+  std::cout << D << "D ball, 20 iterations: inside " << inside << ", Taubin " << taubinInside
+            << " (" << 100 * taubinChange << " %, " << taubinStats.MovedPoints << " moved, "
+            << taubinStats.RejectedMoves << " rejected), Laplacian " << laplacianInside << " ("
+            << 100 * laplacianChange << " %, " << laplacianStats.MovedPoints << " moved, "
+            << laplacianStats.RejectedMoves << " rejected)\n";
+  EXPECT_LT(std::abs(taubinChange), 0.005);
+  EXPECT_LT(laplacianChange, -0.01);
+  EXPECT_LT(laplacianChange, -4.0 * std::abs(taubinChange));
+  EXPECT_EQ(std::abs(stm::BoundarySmoother<D>::TaubinMu(0.5, 0.1) + 1.0 / 1.9) < 1e-15, true);
+}
+
+// The outer-boundary points of background cells (the box) do not move, bit for bit, and are
+// the fixed points; every surface point lies at the ball's radius within a cell size.
+TYPED_TEST(BoundarySmoothTest, BackgroundBoxStaysBitIdentical)
+{
+  constexpr int D = TypeParam::value;
+  const SmoothMesh<D> input = CutBall<D>(Extent<D>(), 0.35);
+  SmoothMesh<D> mesh = input;
+  std::vector<std::uint8_t> roles;
+  const stm::BoundarySmoothStats stats = Smooth<D>(mesh, stm::BoundarySmoothOptions(), &roles);
+  std::int64_t onBox = 0;
+  for (std::int64_t p = 0; p < mesh.NumberOfPoints(); ++p)
+  {
+    bool boundary = false;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      const double x = input.Points[p * D + axis];
+      boundary = boundary || x == 0.0 || x == static_cast<double>(input.Extent);
+    }
+    if (boundary)
+    {
+      ++onBox;
+      EXPECT_EQ(roles[p], stm::BoundarySmoother<D>::Fixed);
+      EXPECT_EQ(std::memcmp(&mesh.Points[p * D], &input.Points[p * D], sizeof(double) * D), 0);
+    }
+    if (roles[p] == stm::BoundarySmoother<D>::Surface)
+    {
+      double r2 = 0.0;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        r2 += std::pow(mesh.Points[p * D + axis] - input.Centre[axis], 2);
+      }
+      EXPECT_NEAR(std::sqrt(r2), input.Radius, 0.5);
+    }
+  }
+  EXPECT_EQ(stats.FixedPoints, onBox);
+  EXPECT_EQ(onBox,
+    static_cast<std::int64_t>(std::pow(input.Extent + 1, D) - std::pow(input.Extent - 1, D)));
+}
+
+// MaxDisplacement bounds every point's distance from its original position.
+TYPED_TEST(BoundarySmoothTest, MaxDisplacementIsRespected)
+{
+  constexpr int D = TypeParam::value;
+  const SmoothMesh<D> input = CutBall<D>(Extent<D>(), 0.35);
+  SmoothMesh<D> mesh = input;
+  stm::BoundarySmoothOptions options;
+  options.Method = stm::SmoothingMethod::Laplacian;
+  options.MaxDisplacement = 0.05;
+  Smooth<D>(mesh, options);
+  double largest = 0.0;
+  for (std::int64_t p = 0; p < mesh.NumberOfPoints(); ++p)
+  {
+    double d2 = 0.0;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      d2 += std::pow(mesh.Points[p * D + axis] - input.Points[p * D + axis], 2);
+    }
+    largest = std::max(largest, std::sqrt(d2));
+  }
+  EXPECT_LE(largest, 0.05 * (1 + 1e-12));
+  EXPECT_GT(largest, 0.04); // the bound is what limits Laplacian here
+}
+
+// A projector onto the sphere (Newton steps, Cut/LevelSetProjection.h) puts every moved surface
+// point on it; most surface points move (the others stay where a move would cost quality).
+TYPED_TEST(BoundarySmoothTest, ProjectorPutsSurfacePointsOntoTheSphere)
+{
+  constexpr int D = TypeParam::value;
+  const SmoothMesh<D> input = CutBall<D>(Extent<D>(), 0.35);
+  SmoothMesh<D> mesh = input;
+  const double* centre = input.Centre;
+  const double radius = input.Radius;
+  auto sphere = [&](const double* x, double* gradient)
+  {
+    double r2 = 0.0;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      gradient[axis] = 2.0 * (x[axis] - centre[axis]);
+      r2 += (x[axis] - centre[axis]) * (x[axis] - centre[axis]);
+    }
+    return r2 - radius * radius;
+  };
+  stm::LevelSetProjectionOptions projection;
+  projection.Tolerance = 1e-10;
+  auto projector = [&](std::int64_t, double* x)
+  {
+    double point[D];
+    std::copy(x, x + D, point);
+    if (!stm::ProjectToLevelSet<D>(point, sphere, projection))
+    {
+      return false;
+    }
+    std::copy(point, point + D, x);
+    return true;
+  };
+  stm::BoundarySmoother<D> smoother;
+  stm::SequentialExecutor executor;
+  ASSERT_TRUE(
+    smoother
+      .Smooth(mesh.Points.data(), mesh.NumberOfPoints(), mesh.Cells.data(), mesh.NumberOfCells(),
+        mesh.Materials.data(), stm::BoundarySmoothOptions(), projector, executor)
+      .IsOk());
+  const std::vector<std::uint8_t>& roles = smoother.GetPointRoles();
+  std::int64_t surface = 0, onSphere = 0;
+  double before = 0.0, after = 0.0;
+  for (std::int64_t p = 0; p < mesh.NumberOfPoints(); ++p)
+  {
+    if (roles[p] != stm::BoundarySmoother<D>::Surface)
+    {
+      continue;
+    }
+    ++surface;
+    double r2 = 0.0, r2Before = 0.0;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      r2 += std::pow(mesh.Points[p * D + axis] - centre[axis], 2);
+      r2Before += std::pow(input.Points[p * D + axis] - centre[axis], 2);
+    }
+    before = std::max(before, std::abs(std::sqrt(r2Before) - radius));
+    after = std::max(after, std::abs(std::sqrt(r2) - radius));
+    const bool moved = !std::equal(
+      mesh.Points.begin() + p * D, mesh.Points.begin() + (p + 1) * D, input.Points.begin() + p * D);
+    if (moved)
+    {
+      EXPECT_NEAR(std::sqrt(r2), radius, 1e-9);
+      ++onSphere;
+    }
+  }
+  std::cout << D << "D ball with projection: " << onSphere << " of " << surface
+            << " surface points on the sphere; largest distance " << before << " -> " << after
+            << "\n";
+  EXPECT_GT(onSphere, surface * 8 / 10);
+  EXPECT_EQ(Check<D>(mesh).IsValid(), true);
+}
+
+// The same bytes for 1 thread and a pool of 4, for both methods and with interior layers.
+TYPED_TEST(BoundarySmoothTest, ThreadCountDoesNotChangeTheResult)
+{
+  constexpr int D = TypeParam::value;
+  const SmoothMesh<D> input = CutBall<D>(Extent<D>(), 0.35);
+  for (const auto method : { stm::SmoothingMethod::Taubin, stm::SmoothingMethod::Laplacian })
+  {
+    stm::BoundarySmoothOptions options;
+    options.Method = method;
+    options.NumberOfInteriorLayers = 3;
+    SmoothMesh<D> sequential = input, pooled = input;
+    stm::SequentialExecutor one;
+    stm::ThreadPoolExecutor four(4);
+    const stm::BoundarySmoothStats a = Smooth<D>(sequential, options, one);
+    const stm::BoundarySmoothStats b = Smooth<D>(pooled, options, four);
+    EXPECT_EQ(std::memcmp(sequential.Points.data(), pooled.Points.data(),
+                sequential.Points.size() * sizeof(double)),
+      0);
+    EXPECT_EQ(a.MovedPoints, b.MovedPoints);
+    EXPECT_EQ(a.RejectedMoves, b.RejectedMoves);
+    EXPECT_EQ(a.VolumeAfter, b.VolumeAfter);
+  }
+}
+
+// A perfect staircase cannot move: every move of a surface point would make some incident
+// simplex worse than the input's worst (1.15 in 2D, 1.22 in 3D), which bounds every move.
+TYPED_TEST(BoundarySmoothTest, PerfectStaircaseStays)
+{
+  constexpr int D = TypeParam::value;
+  const SmoothMesh<D> input = StaircaseBall<D>(Extent<D>(), 0.3, false);
+  SmoothMesh<D> mesh = input;
+  const stm::BoundarySmoothStats stats = Smooth<D>(mesh, stm::BoundarySmoothOptions());
+  EXPECT_EQ(stats.MovedPoints, 0);
+  EXPECT_GT(stats.RejectedMoves, 0);
+  EXPECT_EQ(mesh.Points, input.Points);
+}
+
+/// Root mean square deviation of the interface points' distance from the ball's centre from
+/// its mean: zero on a sphere, the bumps of a staircase otherwise.
+template <int D>
+double RadialRoughness(const SmoothMesh<D>& mesh, const std::vector<std::uint8_t>& roles)
+{
+  std::vector<double> radii;
+  for (std::int64_t p = 0; p < mesh.NumberOfPoints(); ++p)
+  {
+    if (roles[p] == stm::BoundarySmoother<D>::Surface)
+    {
+      double r2 = 0.0;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        r2 += std::pow(mesh.Points[p * D + axis] - mesh.Centre[axis], 2);
+      }
+      radii.push_back(std::sqrt(r2));
+    }
+  }
+  const double mean = std::accumulate(radii.begin(), radii.end(), 0.0) / radii.size();
+  double sum = 0.0;
+  for (const double r : radii)
+  {
+    sum += (r - mean) * (r - mean);
+  }
+  return std::sqrt(sum / radii.size());
+}
+
+// The staircase ball cut by the labels function (the default pipeline before snapping) gets
+// smoother: the radial roughness of its interface points drops by more than 30%, the body
+// volume stays within 2% (removing the staircase's bumps shrinks it a little), and the mesh
+// stays valid with no worse element.
+TYPED_TEST(BoundarySmoothTest, StaircaseSurfaceBecomesSmoother)
+{
+  constexpr int D = TypeParam::value;
+  SmoothMesh<D> mesh = StaircaseBall<D>(Extent<D>(), 0.3, true);
+  const stm::MeshInvariantReport before = Check<D>(mesh);
+  ASSERT_TRUE(before.IsValid()) << before.Summary();
+  const SmoothMesh<D> input = mesh;
+  std::vector<std::uint8_t> roles;
+  const stm::BoundarySmoothStats stats = Smooth<D>(mesh, stm::BoundarySmoothOptions(), &roles);
+  const stm::MeshInvariantReport after = Check<D>(mesh);
+  EXPECT_TRUE(after.IsValid()) << after.Summary();
+  const double roughnessBefore = RadialRoughness<D>(input, roles);
+  const double roughnessAfter = RadialRoughness<D>(mesh, roles);
+  std::cout << D << "D labels-function ball: radial roughness " << roughnessBefore << " -> "
+            << roughnessAfter << ", interface " << InterfaceMeasure<D>(input) << " -> "
+            << InterfaceMeasure<D>(mesh) << " (sphere " << SphereMeasure<D>(mesh.Radius)
+            << "), body volume " << before.VolumePerMaterial.at(1) << " -> "
+            << after.VolumePerMaterial.at(1) << ", worst condition " << stats.WorstConditionBefore
+            << " -> " << stats.WorstConditionAfter << ", smallest dihedral "
+            << stats.MinDihedralBefore << " -> " << stats.MinDihedralAfter << ", "
+            << stats.MovedPoints << " moved, " << stats.RejectedMoves << " rejected\n";
+  EXPECT_LT(roughnessAfter, 0.7 * roughnessBefore);
+  EXPECT_LE(stats.WorstConditionAfter, stats.WorstConditionBefore);
+  EXPECT_GE(stats.MinDihedralAfter, stats.MinDihedralBefore);
+  EXPECT_NEAR(after.VolumePerMaterial.at(1), before.VolumePerMaterial.at(1),
+    0.02 * before.VolumePerMaterial.at(1));
+}
+
+TEST(BoundarySmooth, RejectsBadOptionsAndIds)
+{
+  SmoothMesh<2> mesh = CutBall<2>(8, 0.3);
+  auto run = [&](const stm::BoundarySmoothOptions& options)
+  {
+    stm::BoundarySmoother<2> smoother;
+    stm::SequentialExecutor executor;
+    return smoother.Smooth(mesh.Points.data(), mesh.NumberOfPoints(), mesh.Cells.data(),
+      mesh.NumberOfCells(), mesh.Materials.data(), options, executor);
+  };
+  const std::vector<double> original = mesh.Points;
+  stm::BoundarySmoothOptions options;
+  options.RelaxationFactor = 0.0;
+  EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
+  options = stm::BoundarySmoothOptions();
+  options.PassBand = 1.0;
+  EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
+  options = stm::BoundarySmoothOptions();
+  options.NumberOfIterations = -1;
+  EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
+  options = stm::BoundarySmoothOptions();
+  options.MaxConditionNumber = 0.5;
+  EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
+  options = stm::BoundarySmoothOptions();
+  options.MinDihedralAngle = 180.0;
+  EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
+  EXPECT_EQ(mesh.Points, original);
+  mesh.Cells[5] = mesh.NumberOfPoints();
+  EXPECT_EQ(run(stm::BoundarySmoothOptions()).GetCode(), stm::Status::Code::InvalidArgument);
+  mesh.Cells[5] = 0;
+  mesh.Points[3] = std::nan("");
+  EXPECT_EQ(run(stm::BoundarySmoothOptions()).GetCode(), stm::Status::Code::InvalidArgument);
+}
+
+// Without materials every cell is one body: the whole outer boundary is the surface, nothing
+// is fixed; 20 Taubin iterations round the square's corners but keep a valid mesh.
+TEST(BoundarySmooth, WithoutMaterialsTheOuterBoundaryIsTheSurface)
+{
+  SmoothMesh<2> mesh = CutBall<2>(8, 0.3);
+  stm::BoundarySmoother<2> smoother;
+  stm::SequentialExecutor executor;
+  ASSERT_TRUE(
+    smoother
+      .Smooth(mesh.Points.data(), mesh.NumberOfPoints(), mesh.Cells.data(), mesh.NumberOfCells(),
+        static_cast<const std::int64_t*>(nullptr), stm::BoundarySmoothOptions(), executor)
+      .IsOk());
+  EXPECT_EQ(smoother.GetStats().FixedPoints, 0);
+  EXPECT_EQ(smoother.GetStats().SurfacePoints, 32);
+  EXPECT_EQ(smoother.GetStats().VolumeBefore.count(1), 1u);
+  EXPECT_TRUE(Check<2>(mesh).IsValid());
+}
+
+// 1D: surface points (material changes) have no surface edges and stay; interior layer points
+// move toward their neighbours' centroid. 4D: the generic code keeps a cut 4-ball valid and
+// its worst element no worse.
+TEST(BoundarySmooth, OneAndFourDimensions)
+{
+  SmoothMesh<1> line;
+  const double x[] = { 0.0, 1.0, 2.0, 2.2, 4.0, 5.0, 6.0 };
+  line.Points.assign(std::begin(x), std::end(x));
+  for (std::int64_t c = 0; c < 6; ++c)
+  {
+    line.Cells.push_back(c);
+    line.Cells.push_back(c + 1);
+    line.Materials.push_back(c < 3 ? 1 : 2);
+  }
+  std::vector<std::uint8_t> roles;
+  const stm::BoundarySmoothStats stats = Smooth<1>(line, stm::BoundarySmoothOptions(), &roles);
+  EXPECT_EQ(roles[3], stm::BoundarySmoother<1>::Surface);
+  EXPECT_EQ(line.Points[3], 2.2);
+  EXPECT_EQ(line.Points[0], 0.0); // the outer ends are surface points of a body material
+  EXPECT_EQ(stats.SurfacePoints, 3);
+  EXPECT_LT(line.Points[2], 2.0); // an interior layer point moved toward 1 and 2.2
+  EXPECT_GT(line.Points[2], 1.4);
+  EXPECT_TRUE(Check<1>(line).IsValid());
+
+  SmoothMesh<4> ball = CutBall<4>(4, 0.35);
+  const auto quality = Quality<4>(ball);
+  const stm::BoundarySmoothStats stats4 = Smooth<4>(ball, stm::BoundarySmoothOptions());
+  EXPECT_TRUE(Check<4>(ball).IsValid());
+  EXPECT_LE(Quality<4>(ball).first, quality.first);
+  EXPECT_GT(stats4.SurfacePoints, 0);
+}
+
+} // namespace

@@ -1,0 +1,676 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Vertex snapping: hand-made triangles and tetrahedra with exact expectations (the intersection
+// point, f exactly the iso-value, Alpha 0 and 0.5, the refusals, the conflict rule, the
+// projector), and random fields on adaptive meshes in 1D to 4D (positive cells, no new all-zero
+// cell, a valid mesh, fewer cut cells, thread independence, quality-driven never worse).
+
+#include "CoreTestUtilities.h"
+
+#include "Check/MeshInvariants.h"
+#include "Check/SimplexQuality.h"
+#include "Common/Determinant.h"
+#include "Cut/MarchingSimplices.h"
+#include "Cut/SeparatingFunction.h"
+#include "Cut/VertexSnap.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <vector>
+
+namespace
+{
+using namespace stmtest;
+
+template <int D>
+struct SnapRun
+{
+  stm::Status Result;
+  std::vector<double> Points;
+  std::vector<double> Values;
+  std::vector<std::uint8_t> Moved;
+  std::vector<std::uint8_t> Refused;
+  std::vector<std::uint8_t> Nudged;
+  stm::VertexSnapCounts Counts;
+};
+
+template <int D, class Executor, class Projector = stm::NoSnapProjection>
+SnapRun<D> Snap(std::vector<double> points, std::vector<double> values,
+  const std::vector<std::int64_t>& cells, const stm::VertexSnapOptions& options, Executor& executor,
+  Projector projector = Projector())
+{
+  SnapRun<D> run;
+  stm::VertexSnap<D> snap;
+  run.Result = snap.Snap(points.data(), values.data(), static_cast<std::int64_t>(values.size()),
+    cells.data(), static_cast<std::int64_t>(cells.size()) / (D + 1), options, projector, executor);
+  run.Points = std::move(points);
+  run.Values = std::move(values);
+  run.Moved = snap.GetMovedFlags();
+  run.Refused = snap.GetRefusedFlags();
+  run.Nudged = snap.GetNudgedFlags();
+  run.Counts = snap.GetCounts();
+  return run;
+}
+
+template <int D>
+SnapRun<D> Snap(const std::vector<double>& points, const std::vector<double>& values,
+  const std::vector<std::int64_t>& cells, double alpha,
+  stm::SnapRule rule = stm::SnapRule::Threshold)
+{
+  stm::VertexSnapOptions options;
+  options.Alpha = alpha;
+  options.Rule = rule;
+  stm::SequentialExecutor executor;
+  return Snap<D>(points, values, cells, options, executor);
+}
+
+template <int D>
+double CellDeterminant(const std::vector<double>& points, const std::int64_t* ids)
+{
+  double m[D][D];
+  for (int r = 0; r < D; ++r)
+  {
+    for (int c = 0; c < D; ++c)
+    {
+      m[r][c] = points[ids[c + 1] * D + r] - points[ids[0] * D + r];
+    }
+  }
+  return stm::Determinant<D>(m);
+}
+
+/// The mesh MarchingSimplices makes: its cells and the cut vertices' coordinates.
+template <int D>
+struct CutMesh
+{
+  std::vector<double> Points;
+  std::vector<std::int64_t> Cells;
+  std::int64_t CutEdges = 0;
+};
+
+template <int D>
+CutMesh<D> Cut(const std::vector<double>& points, const std::vector<double>& values,
+  const std::vector<std::int64_t>& cells)
+{
+  stm::MarchingSimplices<D> cutter;
+  stm::MarchingSimplicesOptions options;
+  options.ZeroTolerance = stm::VertexSnapOptions().ZeroTolerance;
+  stm::SequentialExecutor executor;
+  CutMesh<D> mesh;
+  EXPECT_TRUE(cutter
+                .Classify(
+                  values.data(), static_cast<std::int64_t>(values.size()), cells.data(),
+                  static_cast<std::int64_t>(cells.size()) / (D + 1), options,
+                  [](std::int64_t) { return stm::CutSide::Inside; }, executor)
+                .IsOk());
+  mesh.Cells.resize(static_cast<std::size_t>(cutter.GetNumberOfCells() * (D + 1)));
+  std::vector<std::int64_t> parents(static_cast<std::size_t>(cutter.GetNumberOfCells()));
+  std::vector<std::uint8_t> sides(parents.size());
+  EXPECT_TRUE(
+    cutter.WriteCells(cells.data(), mesh.Cells.data(), parents.data(), sides.data(), executor)
+      .IsOk());
+  mesh.Points = points;
+  for (const stm::CutEdge& edge : cutter.GetCutEdges())
+  {
+    for (int c = 0; c < D; ++c)
+    {
+      mesh.Points.push_back(
+        (1.0 - edge.T) * points[edge.A * D + c] + edge.T * points[edge.B * D + c]);
+    }
+  }
+  mesh.CutEdges = static_cast<std::int64_t>(cutter.GetCutEdges().size());
+  return mesh;
+}
+
+template <int D>
+double WorstCondition(const CutMesh<D>& mesh)
+{
+  double worst = 0.0;
+  for (std::size_t cell = 0; cell < mesh.Cells.size() / (D + 1); ++cell)
+  {
+    const double* corners[D + 1];
+    for (int k = 0; k <= D; ++k)
+    {
+      corners[k] = mesh.Points.data() + mesh.Cells[cell * (D + 1) + k] * D;
+    }
+    worst = std::max(worst, stm::MeasureSimplex<D>(corners).Condition);
+  }
+  return worst;
+}
+
+const double Third = 1.0 / 3.0;
+
+// The unit right triangle with f = (-1, 3, 3): both edges from vertex 0 are cut at t = 1/4; the
+// tie goes to the smaller other end, so vertex 0 lands exactly on (1/4, 0) with f exactly 0.
+TEST(VertexSnap, TriangleSnapsToTheExactIntersection)
+{
+  const std::vector<double> points{ 0, 0, 1, 0, 0, 1 };
+  const std::vector<double> values{ -1, 3, 3 };
+  const std::vector<std::int64_t> cells{ 0, 1, 2 };
+  const SnapRun<2> run = Snap<2>(points, values, cells, Third);
+  ASSERT_TRUE(run.Result.IsOk()) << run.Result.GetMessage();
+  EXPECT_EQ(run.Points, (std::vector<double>{ 0.25, 0, 1, 0, 0, 1 }));
+  EXPECT_EQ(run.Values, (std::vector<double>{ 0, 3, 3 }));
+  EXPECT_EQ(run.Moved, (std::vector<std::uint8_t>{ 1, 0, 0 }));
+  EXPECT_EQ(run.Counts.Snapped, 1);
+  EXPECT_EQ(run.Counts.Refused(), 0);
+  EXPECT_EQ(Cut<2>(run.Points, run.Values, cells).CutEdges, 0);
+
+  // Alpha 0 never snaps; 1/4 is not below 0.2.
+  for (double alpha : { 0.0, 0.2, 0.25 })
+  {
+    const SnapRun<2> none = Snap<2>(points, values, cells, alpha);
+    ASSERT_TRUE(none.Result.IsOk());
+    EXPECT_EQ(none.Points, points) << "alpha " << alpha;
+    EXPECT_EQ(none.Values, values) << "alpha " << alpha;
+    EXPECT_EQ(none.Counts.Snapped, 0) << "alpha " << alpha;
+  }
+}
+
+TEST(VertexSnap, TetrahedronSnapsToTheExactIntersection)
+{
+  const std::vector<double> points{ 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1 };
+  const std::vector<std::int64_t> cells{ 0, 1, 2, 3 };
+  // Vertex 3 is nearest: f = (7, 7, 7, -1) cuts its edges at 1/8 of their length from it.
+  const SnapRun<3> run = Snap<3>(points, { 7, 7, 7, -1 }, cells, Third);
+  ASSERT_TRUE(run.Result.IsOk());
+  EXPECT_EQ(run.Points, (std::vector<double>{ 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0.875 }));
+  EXPECT_EQ(run.Values, (std::vector<double>{ 7, 7, 7, 0 }));
+  EXPECT_EQ(run.Moved, (std::vector<std::uint8_t>{ 0, 0, 0, 1 }));
+  EXPECT_GT(CellDeterminant<3>(run.Points, cells.data()), 0.0);
+  const CutMesh<3> cut = Cut<3>(run.Points, run.Values, cells);
+  EXPECT_EQ(cut.CutEdges, 0);
+  EXPECT_EQ(cut.Cells.size(), 4u);
+
+  // A positive vertex snaps too, towards the negative end (t measured from there: 1 - 1/5).
+  const SnapRun<3> positive = Snap<3>(points, { -4, -4, 1, -4 }, cells, Third);
+  ASSERT_TRUE(positive.Result.IsOk());
+  EXPECT_EQ(positive.Moved, (std::vector<std::uint8_t>{ 0, 0, 1, 0 }));
+  EXPECT_EQ(positive.Values[2], 0.0);
+  EXPECT_EQ(positive.Points[6], 0.0);
+  EXPECT_NEAR(positive.Points[7], 0.8, 1e-15); // towards vertex 0, the smallest other end
+  EXPECT_EQ(positive.Points[8], 0.0);
+}
+
+/// The distance of the cut of edge (v, w) from v, as VertexSnap measures it.
+double CutDistance(const std::vector<double>& values, std::int64_t v, std::int64_t w)
+{
+  const bool negative = values[v] < 0;
+  const double fNegative = negative ? values[v] : values[w];
+  const double fPositive = negative ? values[w] : values[v];
+  const double t = -fNegative / (fPositive - fNegative);
+  return negative ? t : 1.0 - t;
+}
+
+// Vertex 2 would close triangle (0, 2, 3), whose other vertices are zero: refused, nothing moved.
+// It is nudged instead (the values used to stay): f(2) grows from 1 to (about) 1.5, so that the
+// cut of edge 2-3 lies 1/3 of the edge from it rather than 1/4; the point stays.
+TEST(VertexSnap, RefusesToPutAWholeCellOnTheSurface)
+{
+  const std::vector<double> points{ 0, 0, 1, 0, 0, 1, 1, 1 };
+  const std::vector<std::int64_t> cells{ 0, 1, 2, 1, 3, 2 };
+  const std::vector<double> values{ 0, 0, 1, -3 }; // edge 2-3 cut 1/4 from vertex 2
+  const SnapRun<2> run = Snap<2>(points, values, cells, Third);
+  ASSERT_TRUE(run.Result.IsOk());
+  EXPECT_EQ(run.Points, points);
+  EXPECT_EQ(run.Values[0], 0.0);
+  EXPECT_EQ(run.Values[1], 0.0);
+  EXPECT_EQ(run.Values[3], -3.0);
+  EXPECT_NEAR(run.Values[2], 1.5, 1e-12);
+  EXPECT_GE(CutDistance(run.Values, 2, 3), Third);
+  EXPECT_EQ(run.Counts.Snapped, 0);
+  EXPECT_EQ(run.Counts.RefusedAllZero, 1);
+  EXPECT_EQ(run.Counts.Nudged, 1);
+  EXPECT_EQ(run.Refused, (std::vector<std::uint8_t>{ 0, 0, 1, 0 }));
+  EXPECT_EQ(run.Nudged, (std::vector<std::uint8_t>{ 0, 0, 1, 0 }));
+  // Already at least Alpha from every cut: no nudge.
+  const SnapRun<2> far = Snap<2>(points, { 0, 0, 1, -1.5 }, cells, Third);
+  EXPECT_EQ(far.Counts.Nudged, 0);
+  EXPECT_EQ(far.Values[2], 1.0);
+}
+
+// A refused tetrahedron vertex (all three others of one cell on the surface) is nudged: with
+// Alpha 1/3 every cut on its edges ends at least 1/3 from it, and a neighbour whose cut the nudge
+// brings closer than Alpha then claims and snaps.
+TEST(VertexSnap, NudgesARefusedTetrahedronVertex)
+{
+  // Tetrahedron (0, 1, 2, 3) with 1, 2, 3 on the surface, and (0, 2, 1, 4) below it.
+  const std::vector<double> points{ 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1 };
+  const std::vector<std::int64_t> cells{ 0, 1, 2, 3, 0, 2, 1, 4 };
+  ASSERT_GT(CellDeterminant<3>(points, cells.data()), 0.0);
+  ASSERT_GT(CellDeterminant<3>(points, cells.data() + 4), 0.0);
+  // Edge 0-4 cut 1/10 from vertex 0: refused (cell 0 would be all zero), nudged to 0.5 * 9.
+  const SnapRun<3> run = Snap<3>(points, { 1, 0, 0, 0, -9 }, cells, Third);
+  ASSERT_TRUE(run.Result.IsOk());
+  EXPECT_EQ(run.Counts.RefusedAllZero, 1);
+  EXPECT_EQ(run.Counts.Nudged, 1);
+  EXPECT_EQ(run.Points, points);
+  EXPECT_NEAR(run.Values[0], 4.5, 1e-12);
+  EXPECT_GE(CutDistance(run.Values, 0, 4), Third);
+  // The nudge cut 0-4 at exactly 1/3 from 0, i.e. 2/3 from vertex 4: no new claim.
+  EXPECT_EQ(run.Counts.Snapped, 0);
+  // At Alpha 0.45 the nudge cuts 0-4 at 0.45 from 0; vertex 4 (0.55) does not claim either.
+  const SnapRun<3> wide = Snap<3>(points, { 1, 0, 0, 0, -9 }, cells, 0.45);
+  EXPECT_GE(CutDistance(wide.Values, 0, 4), 0.45);
+  EXPECT_LT(CutDistance(wide.Values, 0, 4), 0.45 + 1e-12);
+  // Alpha 0 nudges nothing (and snaps nothing).
+  EXPECT_EQ(Snap<3>(points, { 1, 0, 0, 0, -9 }, cells, 0.0).Counts.Nudged, 0);
+}
+
+// A fan around v = (0, 0) with a reflex neighbour d: moving v 1/5 of the way to w = (1, 0)
+// inverts triangle (v, d, a), so the snap is undone.
+TEST(VertexSnap, RefusesToInvertACell)
+{
+  //                               v     w     d           a     e      c       b
+  const std::vector<double> points{ 0, 0, 1, 0, 0.1, 0.05, 1, 1, -1, 1, -1, -1, 1, -1 };
+  const std::vector<std::int64_t> cells{ 0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 5, 0, 5, 6, 0, 6, 1 };
+  for (std::size_t c = 0; c < cells.size() / 3; ++c)
+  {
+    ASSERT_GT(CellDeterminant<2>(points, cells.data() + 3 * c), 0.0) << "cell " << c;
+  }
+  const std::vector<double> values{ -1, 4, 2, 2, 2, 2, 2 };
+  const SnapRun<2> run = Snap<2>(points, values, cells, Third);
+  ASSERT_TRUE(run.Result.IsOk());
+  EXPECT_EQ(run.Points, points);
+  // Nudged (the values used to stay): f(v) from -1 to -2, so edge v-w is cut 1/3 from v.
+  EXPECT_NEAR(run.Values[0], -2.0, 1e-12);
+  EXPECT_EQ(std::vector<double>(run.Values.begin() + 1, run.Values.end()),
+    std::vector<double>(values.begin() + 1, values.end()));
+  EXPECT_EQ(run.Counts.Snapped, 0);
+  EXPECT_EQ(run.Counts.RefusedNonPositive, 1);
+  EXPECT_EQ(run.Counts.Nudged, 1);
+  EXPECT_EQ(run.Refused[0], 1);
+
+  // Without the reflex neighbour the same move is fine.
+  std::vector<double> convex = points;
+  convex[4] = 0.5;
+  convex[5] = 0.3;
+  const SnapRun<2> accepted = Snap<2>(convex, values, cells, Third);
+  EXPECT_EQ(accepted.Counts.Snapped, 1);
+  EXPECT_EQ(accepted.Points[0], 0.2);
+}
+
+// Vertices 0 and 2 both claim and share triangle (0, 2, 3) whose vertex 3 is zero: only one of
+// them may snap. The smaller distance wins; on equal distances, the smaller point id.
+TEST(VertexSnap, ConflictsGoToTheSmallerDistanceThenTheSmallerId)
+{
+  const std::vector<double> points{ 0, 0, 1, 0, 0, 1, -1, 0 };
+  const std::vector<std::int64_t> cells{ 0, 1, 2, 0, 2, 3 };
+  // Equal distances 1/5 (edges 0-1 and 2-1): vertex 0 wins, vertex 2 is refused.
+  const SnapRun<2> tie = Snap<2>(points, { -1, 4, -1, 0 }, cells, Third);
+  ASSERT_TRUE(tie.Result.IsOk());
+  EXPECT_EQ(tie.Moved, (std::vector<std::uint8_t>{ 1, 0, 0, 0 }));
+  EXPECT_EQ(tie.Refused, (std::vector<std::uint8_t>{ 0, 0, 1, 0 }));
+  EXPECT_EQ(tie.Counts.RefusedAllZero, 1);
+  EXPECT_EQ(tie.Counts.Rounds, 2);
+  EXPECT_EQ(tie.Points[0], 0.2);
+  // Vertex 2 nearer (1/9): it wins and moves to (1/9, 8/9).
+  const SnapRun<2> nearer = Snap<2>(points, { -1, 4, -0.5, 0 }, cells, Third);
+  ASSERT_TRUE(nearer.Result.IsOk());
+  EXPECT_EQ(nearer.Moved, (std::vector<std::uint8_t>{ 0, 0, 1, 0 }));
+  EXPECT_EQ(nearer.Refused, (std::vector<std::uint8_t>{ 1, 0, 0, 0 }));
+  EXPECT_NEAR(nearer.Points[4], 1.0 / 9.0, 1e-15);
+  EXPECT_NEAR(nearer.Points[5], 8.0 / 9.0, 1e-15);
+}
+
+// Alpha 0.5 snaps an end of every cut edge: with f = (-1, 1, 1, 1) every edge from vertex 0 is
+// cut at t = 1/2, both ends claim, the smallest id (vertex 0, towards vertex 1) moves, and then
+// no edge is cut. Just below 0.5 nothing snaps there; a cut at 1/4 still snaps.
+TEST(VertexSnap, AlphaHalfLeavesNoCutEdge)
+{
+  const std::vector<double> points{ 0, 0, 1, 0, 0, 1, 1, 1 };
+  const std::vector<std::int64_t> cells{ 0, 1, 2, 1, 3, 2 };
+  const SnapRun<2> run = Snap<2>(points, { -1, 1, 1, 1 }, cells, 0.5);
+  ASSERT_TRUE(run.Result.IsOk());
+  EXPECT_EQ(run.Moved, (std::vector<std::uint8_t>{ 1, 0, 0, 0 }));
+  EXPECT_EQ(run.Points, (std::vector<double>{ 0.5, 0, 1, 0, 0, 1, 1, 1 }));
+  EXPECT_EQ(run.Counts.Refused(), 0);
+  EXPECT_EQ(Cut<2>(run.Points, run.Values, cells).CutEdges, 0);
+  EXPECT_EQ(Snap<2>(points, { -1, 1, 1, 1 }, cells, 0.4999).Counts.Snapped, 0);
+  const SnapRun<2> quarter = Snap<2>(points, { -1, 1, 3, 5 }, cells, 0.4999);
+  EXPECT_EQ(quarter.Counts.Snapped, 1);
+  EXPECT_EQ(quarter.Points[0], 0.0);
+  EXPECT_EQ(quarter.Points[1], 0.25); // along edge 0-2, where 0-1 is cut at 1/2
+  EXPECT_EQ(Cut<2>(quarter.Points, quarter.Values, cells).CutEdges, 0);
+}
+
+TEST(VertexSnap, ProjectorPlacesTheVertexWithinItsEdgeLength)
+{
+  const std::vector<double> points{ 0, 0, 1, 0, 0, 1 };
+  const std::vector<double> values{ -1, 3, 3 };
+  const std::vector<std::int64_t> cells{ 0, 1, 2 };
+  stm::SequentialExecutor executor;
+  stm::VertexSnapOptions options;
+  std::vector<std::int64_t> asked;
+  auto near = [&](std::int64_t point, const double* current, const double* target, double* result)
+  {
+    asked.push_back(point);
+    EXPECT_EQ(current[0], 0.0);
+    EXPECT_EQ(target[0], 0.25);
+    result[0] = 0.2;
+    result[1] = 0.1;
+    return true;
+  };
+  const SnapRun<2> projected = Snap<2>(points, values, cells, options, executor, near);
+  EXPECT_EQ(asked, (std::vector<std::int64_t>{ 0 }));
+  EXPECT_EQ(projected.Points[0], 0.2);
+  EXPECT_EQ(projected.Points[1], 0.1);
+  EXPECT_EQ(projected.Values[0], 0.0);
+  // Farther than the edge (length 1) from the vertex, or declined: the edge's intersection.
+  auto far = [](std::int64_t, const double*, const double*, double* result)
+  {
+    result[0] = 0.9;
+    result[1] = 0.9;
+    return true;
+  };
+  EXPECT_EQ(Snap<2>(points, values, cells, options, executor, far).Points[0], 0.25);
+  auto declined = [](std::int64_t, const double*, const double*, double*) { return false; };
+  EXPECT_EQ(Snap<2>(points, values, cells, options, executor, declined).Points[0], 0.25);
+}
+
+TEST(VertexSnap, RejectsBadOptionsValuesAndIds)
+{
+  const std::vector<double> points{ 0, 0, 1, 0, 0, 1 };
+  const std::vector<std::int64_t> cells{ 0, 1, 2 };
+  for (double alpha : { -0.1, 0.51, std::nan("") })
+  {
+    EXPECT_EQ(Snap<2>(points, { -1, 3, 3 }, cells, alpha).Result.GetCode(),
+      stm::Status::Code::InvalidArgument);
+  }
+  const SnapRun<2> nan = Snap<2>(points, { -1, std::nan(""), 3 }, cells, Third);
+  EXPECT_EQ(nan.Result.GetCode(), stm::Status::Code::InvalidArgument);
+  EXPECT_NE(nan.Result.GetMessage().find("NaN"), std::string::npos);
+  EXPECT_EQ(Snap<2>(points, { -1, 3, 3 }, { 0, 1, 3 }, Third).Result.GetCode(),
+    stm::Status::Code::InvalidArgument);
+  {
+    stm::SequentialExecutor executor;
+    stm::VertexSnapOptions options;
+    options.QualityBound = -1.0;
+    EXPECT_EQ(Snap<2>(points, { -1, 3, 3 }, cells, options, executor).Result.GetCode(),
+      stm::Status::Code::InvalidArgument);
+  }
+  stm::SequentialExecutor aborted;
+  aborted.RequestAbort();
+  EXPECT_EQ(
+    Snap<2>(points, { -1, 3, 3 }, cells, stm::VertexSnapOptions(), aborted).Result.GetCode(),
+    stm::Status::Code::Aborted);
+}
+
+template <int D>
+SimplicialMesh<D> AdaptiveMesh(unsigned seed, std::int64_t extent)
+{
+  const LabelImage<D> image = MakeRandomImage<D>(UniformExtents<D>(extent), seed, 2, 3, 20);
+  stm::SequentialExecutor executor;
+  stm::Spacetree<D> tree;
+  EXPECT_TRUE(BuildTree<D>(image, 4, 1, false, executor, tree).IsOk());
+  stm::SpacetreeTessellationOptions options;
+  options.IncludeBackground = true;
+  if (D == 1 || D == 4)
+  {
+    options.Template = stm::CellTemplate::Kuhn;
+  }
+  SimplicialMesh<D> mesh;
+  EXPECT_TRUE(TessellateTree<D>(tree, options, executor, mesh).IsOk());
+  return mesh;
+}
+
+/// A smooth field (a ball) plus noise, so that cuts fall anywhere along the edges.
+template <int D>
+std::vector<double> RandomField(const std::vector<double>& points, double extent, unsigned seed)
+{
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> noise(-0.5, 0.5);
+  std::vector<double> values(points.size() / D);
+  for (std::size_t p = 0; p < values.size(); ++p)
+  {
+    double r2 = 0.0;
+    for (int c = 0; c < D; ++c)
+    {
+      const double x = points[p * D + c] - 0.5 * extent - 0.1 * c;
+      r2 += x * x;
+    }
+    values[p] = std::sqrt(r2) - 0.3 * extent + noise(random);
+  }
+  return values;
+}
+
+template <int D>
+std::int64_t CountAllZeroCells(
+  const std::vector<double>& values, const std::vector<std::int64_t>& cells)
+{
+  std::int64_t count = 0;
+  for (std::size_t cell = 0; cell < cells.size() / (D + 1); ++cell)
+  {
+    bool allZero = true;
+    for (int k = 0; k <= D; ++k)
+    {
+      allZero = allZero && std::abs(values[cells[cell * (D + 1) + k]]) <= 1e-9;
+    }
+    count += allZero ? 1 : 0;
+  }
+  return count;
+}
+
+template <class T>
+class VertexSnapMeshTest : public ::testing::Test
+{
+};
+using MeshDimensions = ::testing::Types<Dim<2>, Dim<3>>;
+TYPED_TEST_SUITE(VertexSnapMeshTest, MeshDimensions);
+
+TYPED_TEST(VertexSnapMeshTest, RandomFieldsGiveValidMeshesWithFewerCells)
+{
+  constexpr int D = TypeParam::value;
+  const std::int64_t extent = D == 2 ? 24 : 10;
+  for (unsigned seed = 1; seed <= 3; ++seed)
+  {
+    const SimplicialMesh<D> mesh = AdaptiveMesh<D>(seed, extent);
+    const std::vector<double> points = mesh.Coordinates();
+    const std::vector<double> values = RandomField<D>(points, static_cast<double>(extent), seed);
+    const CutMesh<D> unsnapped = Cut<D>(points, values, mesh.Connectivity);
+    const double unsnappedWorst = WorstCondition<D>(unsnapped);
+    ASSERT_GT(unsnapped.CutEdges, 0);
+    const std::int64_t allZeroBefore = CountAllZeroCells<D>(values, mesh.Connectivity);
+
+    struct Case
+    {
+      double Alpha;
+      stm::SnapRule Rule;
+      double Bound;
+    };
+    for (const Case& snapCase :
+      { Case{ Third, stm::SnapRule::Threshold, 0.0 }, Case{ 0.5, stm::SnapRule::Threshold, 0.0 },
+        Case{ 0.0, stm::SnapRule::QualityDriven, 0.0 },
+        Case{ 0.45, stm::SnapRule::Threshold, 3.0 } })
+    {
+      SCOPED_TRACE(::testing::Message()
+        << "seed " << seed << ", alpha " << snapCase.Alpha << ", rule "
+        << static_cast<int>(snapCase.Rule) << ", bound " << snapCase.Bound);
+      stm::VertexSnapOptions options;
+      options.Alpha = snapCase.Alpha;
+      options.Rule = snapCase.Rule;
+      options.QualityBound = snapCase.Bound;
+      stm::SequentialExecutor sequential;
+      const SnapRun<D> run = Snap<D>(points, values, mesh.Connectivity, options, sequential);
+      ASSERT_TRUE(run.Result.IsOk()) << run.Result.GetMessage();
+      EXPECT_GT(run.Counts.Snapped, 0);
+      EXPECT_EQ(std::count(run.Moved.begin(), run.Moved.end(), 1), run.Counts.Snapped);
+
+      // Every cell positive, no new all-zero cell, a valid mesh; snapped points exactly zero.
+      std::int64_t nonPositive = 0;
+      for (std::int64_t cell = 0; cell < mesh.GetNumberOfSimplices(); ++cell)
+      {
+        nonPositive +=
+          CellDeterminant<D>(run.Points, mesh.Connectivity.data() + cell * (D + 1)) > 0 ? 0 : 1;
+      }
+      EXPECT_EQ(nonPositive, 0);
+      EXPECT_EQ(CountAllZeroCells<D>(run.Values, mesh.Connectivity), allZeroBefore);
+      const stm::MeshInvariantReport report =
+        stm::CheckSimplicialMesh<D>(run.Points, mesh.Connectivity, nullptr);
+      EXPECT_TRUE(report.IsValid()) << report.Summary();
+      EXPECT_EQ(std::count(run.Nudged.begin(), run.Nudged.end(), 1), run.Counts.Nudged);
+      for (std::size_t p = 0; p < run.Moved.size(); ++p)
+      {
+        if (run.Moved[p])
+        {
+          ASSERT_EQ(run.Values[p], 0.0);
+        }
+        else
+        {
+          if (run.Nudged[p])
+          {
+            // Nudged points keep their sign and place, and only move away from the surface.
+            ASSERT_TRUE(run.Refused[p]);
+            ASSERT_GT(std::abs(run.Values[p]), std::abs(values[p]));
+            ASSERT_EQ(run.Values[p] < 0, values[p] < 0);
+          }
+          else
+          {
+            ASSERT_EQ(run.Values[p], values[p]);
+          }
+          for (int c = 0; c < D; ++c)
+          {
+            ASSERT_EQ(run.Points[p * D + c], points[p * D + c]);
+          }
+        }
+      }
+
+      // The cut makes no more cells than without snapping.
+      const CutMesh<D> snapped = Cut<D>(run.Points, run.Values, mesh.Connectivity);
+      EXPECT_LE(snapped.Cells.size(), unsnapped.Cells.size());
+      EXPECT_LT(snapped.CutEdges, unsnapped.CutEdges);
+      const stm::MeshInvariantReport cutReport =
+        stm::CheckSimplicialMesh<D>(snapped.Points, snapped.Cells, nullptr);
+      EXPECT_TRUE(cutReport.IsValid()) << cutReport.Summary();
+
+      if (snapCase.Alpha == 0.5)
+      {
+        // Every edge still cut has a refused end.
+        std::int64_t unexplained = 0;
+        for (std::size_t cell = 0; cell < mesh.Connectivity.size() / (D + 1); ++cell)
+        {
+          const std::int64_t* ids = mesh.Connectivity.data() + cell * (D + 1);
+          for (int a = 0; a <= D; ++a)
+          {
+            for (int b = a + 1; b <= D; ++b)
+            {
+              const double fa = run.Values[ids[a]], fb = run.Values[ids[b]];
+              const bool cut = (fa < -1e-9 && fb > 1e-9) || (fa > 1e-9 && fb < -1e-9);
+              unexplained += cut && !run.Refused[ids[a]] && !run.Refused[ids[b]] ? 1 : 0;
+            }
+          }
+        }
+        EXPECT_EQ(unexplained, 0);
+      }
+      if (snapCase.Bound > 0)
+      {
+        // The bound refuses snaps the plain rule makes: more refusals for quality, and the worst
+        // element no worse than the plain rule's at the same Alpha on these fields.
+        stm::VertexSnapOptions plain = options;
+        plain.QualityBound = 0.0;
+        const SnapRun<D> unbounded = Snap<D>(points, values, mesh.Connectivity, plain, sequential);
+        EXPECT_EQ(unbounded.Counts.RefusedQuality, 0);
+        EXPECT_LE(WorstCondition<D>(snapped),
+          WorstCondition<D>(Cut<D>(unbounded.Points, unbounded.Values, mesh.Connectivity)));
+        std::cout << D << "D seed " << seed << ": Alpha 0.45, bound 3: refused for quality "
+                  << run.Counts.RefusedQuality << ", worst condition " << WorstCondition<D>(snapped)
+                  << " (unbounded "
+                  << WorstCondition<D>(
+                       Cut<D>(unbounded.Points, unbounded.Values, mesh.Connectivity))
+                  << ")\n";
+      }
+      if (snapCase.Rule == stm::SnapRule::QualityDriven)
+      {
+        EXPECT_LE(WorstCondition<D>(snapped), unsnappedWorst);
+        std::cout << D << "D seed " << seed << ": quality-driven snapped " << run.Counts.Snapped
+                  << ", refused for quality " << run.Counts.RefusedQuality << ", worst condition "
+                  << WorstCondition<D>(snapped) << " (cut only " << unsnappedWorst << ")\n";
+      }
+
+      // The same bytes on four threads.
+      stm::ThreadPoolExecutor threads(4);
+      const SnapRun<D> threaded = Snap<D>(points, values, mesh.Connectivity, options, threads);
+      ASSERT_TRUE(threaded.Result.IsOk());
+      EXPECT_EQ(
+        std::memcmp(threaded.Points.data(), run.Points.data(), run.Points.size() * sizeof(double)),
+        0);
+      EXPECT_EQ(
+        std::memcmp(threaded.Values.data(), run.Values.data(), run.Values.size() * sizeof(double)),
+        0);
+      EXPECT_EQ(threaded.Moved, run.Moved);
+      EXPECT_EQ(threaded.Refused, run.Refused);
+      EXPECT_EQ(threaded.Nudged, run.Nudged);
+      EXPECT_EQ(threaded.Counts.Snapped, run.Counts.Snapped);
+      EXPECT_EQ(threaded.Counts.Nudged, run.Counts.Nudged);
+      EXPECT_EQ(threaded.Counts.Rounds, run.Counts.Rounds);
+    }
+  }
+}
+
+template <class T>
+class VertexSnapSmokeTest : public ::testing::Test
+{
+};
+using SmokeDimensions = ::testing::Types<Dim<1>, Dim<4>>;
+TYPED_TEST_SUITE(VertexSnapSmokeTest, SmokeDimensions);
+
+// 1D and 4D: snapping works, keeps every cell positive, and is thread independent.
+TYPED_TEST(VertexSnapSmokeTest, SnapsAndKeepsCellsPositive)
+{
+  constexpr int D = TypeParam::value;
+  const std::int64_t extent = D == 1 ? 40 : 4;
+  const SimplicialMesh<D> mesh = AdaptiveMesh<D>(2, extent);
+  const std::vector<double> points = mesh.Coordinates();
+  const std::vector<double> values = RandomField<D>(points, static_cast<double>(extent), 9);
+  for (stm::SnapRule rule : { stm::SnapRule::Threshold, stm::SnapRule::QualityDriven })
+  {
+    stm::VertexSnapOptions options;
+    options.Rule = rule;
+    stm::SequentialExecutor sequential;
+    const SnapRun<D> run = Snap<D>(points, values, mesh.Connectivity, options, sequential);
+    ASSERT_TRUE(run.Result.IsOk());
+    EXPECT_GT(run.Counts.Snapped, 0);
+    for (std::int64_t cell = 0; cell < mesh.GetNumberOfSimplices(); ++cell)
+    {
+      ASSERT_GT(CellDeterminant<D>(run.Points, mesh.Connectivity.data() + cell * (D + 1)), 0.0);
+    }
+    const CutMesh<D> snapped = Cut<D>(run.Points, run.Values, mesh.Connectivity);
+    EXPECT_LE(snapped.Cells.size(), Cut<D>(points, values, mesh.Connectivity).Cells.size());
+    stm::ThreadPoolExecutor threads(4);
+    const SnapRun<D> threaded = Snap<D>(points, values, mesh.Connectivity, options, threads);
+    EXPECT_EQ(threaded.Points, run.Points);
+    EXPECT_EQ(threaded.Moved, run.Moved);
+  }
+}
+
+// The gradient the gray-image projection follows: the d-linear interpolant's, equal to central
+// differences inside a dual cell, and the value equal to Sample's.
+TEST(VertexSnap, DualGridGradientMatchesDifferences)
+{
+  const double voxels[2 * 3 * 2] = { 0.5, -1, 2, 3, -4, 0.25, 1, 7, -2, 0, 5, -3 };
+  const stm::VoxelField<3, double> field{ { 2, 3, 2 }, voxels, 9.0 };
+  std::mt19937 random(4);
+  std::uniform_real_distribution<double> coordinate(-0.7, 3.7);
+  for (int trial = 0; trial < 200; ++trial)
+  {
+    double x[3] = { coordinate(random), coordinate(random), coordinate(random) };
+    double gradient[3];
+    EXPECT_EQ(field.SampleWithGradient(x, gradient), field.Sample(x));
+    for (int axis = 0; axis < 3; ++axis)
+    {
+      const double h = 1e-6;
+      double forward[3] = { x[0], x[1], x[2] }, backward[3] = { x[0], x[1], x[2] };
+      forward[axis] += h;
+      backward[axis] -= h;
+      if (std::floor(forward[axis] - 0.5) != std::floor(backward[axis] - 0.5))
+      {
+        continue; // across a dual cell face the interpolant has a kink
+      }
+      EXPECT_NEAR(gradient[axis], (field.Sample(forward) - field.Sample(backward)) / (2 * h), 1e-6);
+    }
+  }
+}
+
+} // namespace

@@ -1,0 +1,338 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// stmBoundarySmooth through the VTK pipeline: the analytic ball (Taubin keeps the inside
+// volume, Laplacian shrinks it, no inverted cell, no worse element, the box fixed), projection
+// onto the sphere, a 2D disk, the AAL brain mask after the labels cut, and bad input.
+
+#include "stmFilterTestUtilities.h"
+#include "stmVerdictQuality.h"
+
+#include "stmBoundarySmooth.h"
+#include "stmImageToSpacetree.h"
+#include "stmMarchingSimplices.h"
+#include "stmSeparatingFunction.h"
+#include "stmSpacetreeBalance.h"
+#include "stmSpacetreeTessellate.h"
+
+#include "vtkCellData.h"
+#include "vtkDataArray.h"
+#include "vtkImageData.h"
+#include "vtkImageThreshold.h"
+#include "vtkMath.h"
+#include "vtkNIFTIImageReader.h"
+#include "vtkNew.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
+#include "vtkSphere.h"
+#include "vtkUnstructuredGrid.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+
+namespace
+{
+const char* const AalPath = "/usr/share/mricron/templates/aal.nii.gz";
+const int Axes3[3] = { 0, 1, 2 };
+const int Axes2[2] = { 0, 1 };
+
+double VolumeOfMaterial(const stm::MeshInvariantReport& report, int material)
+{
+  const auto found = report.VolumePerMaterial.find(material);
+  return found == report.VolumePerMaterial.end() ? 0.0 : found->second;
+}
+
+/// The unit box, n^3 voxels, 5 tetrahedra each, cut by the sphere (both sides kept).
+struct BallPipeline
+{
+  vtkNew<stmImageToSpacetree> Tree;
+  vtkNew<stmSpacetreeTessellate> Tessellate;
+  vtkNew<vtkSphere> Sphere;
+  vtkNew<stmSeparatingFunction> Function;
+  vtkNew<stmMarchingSimplices> Cut;
+
+  BallPipeline(int n, double radius)
+  {
+    const int dims[3] = { n, n, n };
+    const double h = 1.0 / n;
+    const double spacing[3] = { h, h, h }, origin[3] = { h / 2, h / 2, h / 2 };
+    auto image = stmTest::MakeLabelImage(dims, spacing, origin, [](int, int, int) { return 1; });
+    this->Tree->SetInputData(image);
+    this->Tree->SetMaxCellSize(1);
+    this->Tessellate->SetInputConnection(this->Tree->GetOutputPort());
+    this->Tessellate->SetSeparatingFunction(stmSpacetreeTessellate::NO_FUNCTION);
+    this->Sphere->SetCenter(0.5, 0.5, 0.5);
+    this->Sphere->SetRadius(radius);
+    this->Function->SetInputConnection(this->Tessellate->GetOutputPort());
+    this->Function->SetImplicitFunction(this->Sphere);
+    this->Cut->SetInputConnection(this->Function->GetOutputPort());
+    this->Cut->Update();
+  }
+  vtkUnstructuredGrid* Mesh() { return vtkUnstructuredGrid::SafeDownCast(this->Cut->GetOutput()); }
+};
+
+// The analytic ball after 20 iterations: Taubin keeps the inside volume within 0.5%, Laplacian
+// shrinks it by more than 1%; both leave a valid mesh (every cell positive), the worst element
+// no worse, the box's points unchanged, and the cells and arrays of the input.
+TEST(BoundarySmoothFilter, AnalyticBallTaubinKeepsTheVolumeLaplacianShrinksIt)
+{
+  BallPipeline ball(20, 0.35);
+  vtkUnstructuredGrid* input = ball.Mesh();
+  const stm::MeshInvariantReport before = stmTest::CheckMesh<3>(input, Axes3, 1e-12);
+  ASSERT_TRUE(before.IsValid()) << before.Summary();
+  const double inside = VolumeOfMaterial(before, 1);
+  const stmTest::VerdictQualityRange qualityBefore = stmTest::MeasureVerdictQuality(input);
+  double changes[2] = { 0, 0 };
+  for (const int method : { stmBoundarySmooth::TAUBIN, stmBoundarySmooth::LAPLACIAN })
+  {
+    vtkNew<stmBoundarySmooth> smooth;
+    smooth->SetInputConnection(ball.Cut->GetOutputPort());
+    smooth->SetMethod(method);
+    smooth->Update();
+    vtkUnstructuredGrid* mesh = smooth->GetOutput();
+    ASSERT_EQ(mesh->GetNumberOfCells(), input->GetNumberOfCells());
+    ASSERT_EQ(mesh->GetNumberOfPoints(), input->GetNumberOfPoints());
+    const stm::MeshInvariantReport report = stmTest::CheckMesh<3>(mesh, Axes3, 1e-12);
+    EXPECT_TRUE(report.IsValid()) << report.Summary();
+    EXPECT_NEAR(report.TotalVolume, before.TotalVolume, 1e-9 * before.TotalVolume);
+    const stmTest::VerdictQualityRange quality = stmTest::MeasureVerdictQuality(mesh);
+    EXPECT_LE(quality.WorstCondition, qualityBefore.WorstCondition * (1 + 1e-9));
+    EXPECT_GE(quality.SmallestAngle, qualityBefore.SmallestAngle * (1 - 1e-9));
+    changes[method] = (VolumeOfMaterial(report, 1) - inside) / inside;
+    EXPECT_GT(smooth->GetNumberOfMovedPoints(), 1000);
+    ASSERT_NE(mesh->GetPointData()->GetArray("SmoothingDisplacement"), nullptr);
+    ASSERT_NE(mesh->GetPointData()->GetArray("SeparatingFunction"), nullptr);
+    ASSERT_NE(mesh->GetCellData()->GetArray("OriginalMaterial"), nullptr);
+    EXPECT_EQ(mesh->GetPoints()->GetDataType(), input->GetPoints()->GetDataType());
+    vtkIdType boxPoints = 0;
+    double bounds[6];
+    input->GetBounds(bounds);
+    for (vtkIdType p = 0; p < mesh->GetNumberOfPoints(); ++p)
+    {
+      double x[3], y[3];
+      input->GetPoint(p, x);
+      bool onBox = false;
+      for (int axis = 0; axis < 3; ++axis)
+      {
+        onBox = onBox || x[axis] == bounds[2 * axis] || x[axis] == bounds[2 * axis + 1];
+      }
+      if (onBox)
+      {
+        ++boxPoints;
+        mesh->GetPoint(p, y);
+        EXPECT_TRUE(x[0] == y[0] && x[1] == y[1] && x[2] == y[2]) << "box point " << p;
+      }
+    }
+    EXPECT_EQ(boxPoints, 21 * 21 * 21 - 19 * 19 * 19);
+    std::cout << (method == stmBoundarySmooth::TAUBIN ? "Taubin" : "Laplacian")
+              << ", analytic ball n = 20, 20 iterations: inside volume " << inside << " -> "
+              << VolumeOfMaterial(report, 1) << " (" << 100 * changes[method] << " %), "
+              << smooth->GetNumberOfMovedPoints() << " moved, "
+              << smooth->GetNumberOfRejectedMoves() << " rejected, worst condition "
+              << qualityBefore.WorstCondition << " -> " << quality.WorstCondition
+              << ", smallest dihedral " << qualityBefore.SmallestAngle << " -> "
+              << quality.SmallestAngle << "\n";
+  }
+  EXPECT_LT(std::abs(changes[stmBoundarySmooth::TAUBIN]), 0.005);
+  EXPECT_LT(changes[stmBoundarySmooth::LAPLACIAN], -0.01);
+}
+
+// Projection onto the sphere: every moved surface point lies on it; MaxDisplacement holds.
+TEST(BoundarySmoothFilter, ProjectionAndMaxDisplacement)
+{
+  BallPipeline ball(16, 0.35);
+  vtkUnstructuredGrid* input = ball.Mesh();
+  vtkNew<stmBoundarySmooth> smooth;
+  smooth->SetInputConnection(ball.Cut->GetOutputPort());
+  smooth->SetImplicitFunction(ball.Sphere);
+  smooth->ProjectToFunctionOn();
+  smooth->SetNumberOfInteriorLayers(0);
+  smooth->Update();
+  vtkUnstructuredGrid* mesh = smooth->GetOutput();
+  EXPECT_TRUE(stmTest::CheckMesh<3>(mesh, Axes3, 1e-12).IsValid());
+  vtkIdType moved = 0;
+  for (vtkIdType p = 0; p < mesh->GetNumberOfPoints(); ++p)
+  {
+    double x[3], y[3];
+    input->GetPoint(p, x);
+    mesh->GetPoint(p, y);
+    if (x[0] != y[0] || x[1] != y[1] || x[2] != y[2])
+    {
+      ++moved;
+      EXPECT_NEAR(
+        std::sqrt(vtkMath::Distance2BetweenPoints(y, ball.Sphere->GetCenter())), 0.35, 1e-6);
+    }
+  }
+  EXPECT_EQ(moved, smooth->GetNumberOfMovedPoints());
+  EXPECT_GT(moved, 500);
+
+  smooth->ProjectToFunctionOff();
+  smooth->SetMethod(stmBoundarySmooth::LAPLACIAN);
+  smooth->SetMaxDisplacement(0.002);
+  smooth->Update();
+  vtkDataArray* displacement =
+    smooth->GetOutput()->GetPointData()->GetArray("SmoothingDisplacement");
+  ASSERT_NE(displacement, nullptr);
+  double largest = 0.0;
+  for (vtkIdType p = 0; p < displacement->GetNumberOfTuples(); ++p)
+  {
+    largest = std::max(largest, vtkMath::Norm(displacement->GetTuple3(p)));
+  }
+  EXPECT_LE(largest, 0.002 * (1 + 1e-9));
+  EXPECT_GT(largest, 0.0015);
+}
+
+// 2D: a disk of labels cut by the default function stays a valid triangle mesh with no worse
+// triangle, the pixel frame (background) fixed.
+TEST(BoundarySmoothFilter, TwoDimensionalDisk)
+{
+  const int dims[3] = { 30, 26, 1 };
+  const double spacing[3] = { 0.5, 0.5, 1 }, origin[3] = { 0, 0, 0 };
+  auto image = stmTest::MakeLabelImage(dims, spacing, origin,
+    [](int i, int j, int) { return (i - 14) * (i - 14) + (j - 12) * (j - 12) < 64 ? 3 : 0; });
+  vtkNew<stmImageToSpacetree> tree;
+  tree->SetInputData(image);
+  vtkNew<stmSpacetreeBalance> balance;
+  balance->SetInputConnection(tree->GetOutputPort());
+  vtkNew<stmSpacetreeTessellate> tessellate;
+  tessellate->SetInputConnection(balance->GetOutputPort());
+  vtkNew<stmMarchingSimplices> cut;
+  cut->SetInputConnection(tessellate->GetOutputPort());
+  cut->SetInsideMaterial(3);
+  vtkNew<stmBoundarySmooth> smooth;
+  smooth->SetInputConnection(cut->GetOutputPort());
+  smooth->Update();
+  vtkUnstructuredGrid* input = vtkUnstructuredGrid::SafeDownCast(cut->GetOutput());
+  const stm::MeshInvariantReport before = stmTest::CheckMesh<2>(input, Axes2, 1e-9);
+  const stm::MeshInvariantReport after = stmTest::CheckMesh<2>(smooth->GetOutput(), Axes2, 1e-9);
+  EXPECT_TRUE(after.IsValid()) << after.Summary();
+  EXPECT_NEAR(after.TotalVolume, before.TotalVolume, 1e-9 * before.TotalVolume);
+  EXPECT_NEAR(
+    VolumeOfMaterial(after, 3), VolumeOfMaterial(before, 3), 0.01 * VolumeOfMaterial(before, 3));
+  EXPECT_GT(smooth->GetNumberOfMovedPoints(), 20);
+  EXPECT_LE(stmTest::MeasureVerdictQuality(smooth->GetOutput()).WorstCondition,
+    stmTest::MeasureVerdictQuality(input).WorstCondition * (1 + 1e-9));
+}
+
+// The AAL brain mask: labels function, cut, 20 Taubin iterations: a valid mesh, the inside
+// volume within 1% of the voxels', the worst element no worse; the figures are printed.
+TEST(BoundarySmoothFilter, AalBrainMask)
+{
+  if (!std::ifstream(AalPath).good())
+  {
+    GTEST_SKIP() << AalPath << " is missing; install Debian's mricron-data";
+  }
+  vtkNew<vtkNIFTIImageReader> reader;
+  reader->SetFileName(AalPath);
+  vtkNew<vtkImageThreshold> mask;
+  mask->SetInputConnection(reader->GetOutputPort());
+  mask->ThresholdByUpper(1);
+  mask->SetInValue(1);
+  mask->SetOutValue(0);
+  mask->ReplaceInOn();
+  mask->ReplaceOutOn();
+  mask->SetOutputScalarTypeToUnsignedChar();
+  mask->Update();
+  const long long bodyVoxels = stmTest::CountLabels(mask->GetOutput())[1];
+  const double* spacing = mask->GetOutput()->GetSpacing();
+  const double voxelVolume = static_cast<double>(bodyVoxels) * spacing[0] * spacing[1] * spacing[2];
+  vtkNew<stmImageToSpacetree> tree;
+  tree->SetInputConnection(mask->GetOutputPort());
+  vtkNew<stmSpacetreeBalance> balance;
+  balance->SetInputConnection(tree->GetOutputPort());
+  vtkNew<stmSpacetreeTessellate> tessellate;
+  tessellate->SetInputConnection(balance->GetOutputPort());
+  vtkNew<stmMarchingSimplices> cut;
+  cut->SetInputConnection(tessellate->GetOutputPort());
+  cut->Update();
+  vtkUnstructuredGrid* input = vtkUnstructuredGrid::SafeDownCast(cut->GetOutput());
+  const stm::MeshInvariantReport before = stmTest::CheckMesh<3>(input, Axes3, 1e-9);
+  const stmTest::VerdictQualityRange qualityBefore = stmTest::MeasureVerdictQuality(input);
+
+  vtkNew<stmBoundarySmooth> smooth;
+  smooth->SetInputConnection(cut->GetOutputPort());
+  const auto start = std::chrono::steady_clock::now();
+  smooth->Update();
+  const double seconds =
+    std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  vtkUnstructuredGrid* mesh = smooth->GetOutput();
+  const stm::MeshInvariantReport report = stmTest::CheckMesh<3>(mesh, Axes3, 1e-9);
+  EXPECT_TRUE(report.IsValid()) << report.Summary();
+  EXPECT_NEAR(report.TotalVolume, before.TotalVolume, 1e-9 * before.TotalVolume);
+  const double inside = VolumeOfMaterial(report, 1);
+  EXPECT_NEAR(inside, voxelVolume, 0.01 * voxelVolume);
+  const stmTest::VerdictQualityRange quality = stmTest::MeasureVerdictQuality(mesh);
+  EXPECT_LE(quality.WorstCondition, qualityBefore.WorstCondition * (1 + 1e-9));
+  EXPECT_GE(quality.SmallestAngle, qualityBefore.SmallestAngle * (1 - 1e-9));
+  std::cout << "AAL brain mask, labels function + cut + Taubin 20: " << mesh->GetNumberOfCells()
+            << " tetrahedra, " << smooth->GetNumberOfMovedPoints() << " points moved, "
+            << smooth->GetNumberOfRejectedMoves() << " moves rejected; inside volume "
+            << VolumeOfMaterial(before, 1) << " -> " << inside << " mm3 (voxels " << voxelVolume
+            << ", " << 100 * (inside - voxelVolume) / voxelVolume << " %); worst condition "
+            << qualityBefore.WorstCondition << " -> " << quality.WorstCondition
+            << ", smallest dihedral " << qualityBefore.SmallestAngle << " -> "
+            << quality.SmallestAngle << " degrees; " << seconds << " s\n";
+}
+
+TEST(BoundarySmoothFilter, BadInputGetsClearErrors)
+{
+  const auto check = stmTest::ExpectErrorAndEmptyOutput;
+  const int dims[3] = { 8, 8, 8 };
+  const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
+  auto image = stmTest::MakeLabelImage(
+    dims, spacing, origin, [](int i, int j, int k) { return i > 2 && j > 2 && k > 3 ? 1 : 0; });
+  vtkNew<stmImageToSpacetree> tree;
+  tree->SetInputData(image);
+  tree->Update();
+  { // hexahedra
+    vtkNew<stmBoundarySmooth> smooth;
+    smooth->SetInputData(tree->GetOutput());
+    check(smooth, "only tetrahedra or only triangles");
+  }
+  { // no cells
+    vtkNew<vtkUnstructuredGrid> empty;
+    vtkNew<stmBoundarySmooth> smooth;
+    smooth->SetInputData(empty);
+    check(smooth, "no cells");
+  }
+  vtkNew<stmSpacetreeTessellate> tessellate;
+  tessellate->SetInputConnection(tree->GetOutputPort());
+  vtkNew<stmMarchingSimplices> cut;
+  cut->SetInputConnection(tessellate->GetOutputPort());
+  cut->Update();
+  vtkNew<stmBoundarySmooth> smooth;
+  smooth->SetInputConnection(cut->GetOutputPort());
+  smooth->SetRelaxationFactor(0.0);
+  check(smooth, "RelaxationFactor must be in (0, 1]");
+  smooth->SetRelaxationFactor(0.5);
+  smooth->SetPassBand(1.5);
+  check(smooth, "PassBand must be in (0, 1)");
+  smooth->SetPassBand(0.1);
+  smooth->SetMaxConditionNumber(0.5);
+  check(smooth, "MaxConditionNumber must be >= 1");
+  smooth->SetMaxConditionNumber(3.5);
+  smooth->SetMinDihedralAngle(-1);
+  check(smooth, "MinDihedralAngle must be in [0, 180)");
+  smooth->SetMinDihedralAngle(15);
+  smooth->ProjectToFunctionOn();
+  check(smooth, "no ImplicitFunction");
+  smooth->ProjectToFunctionOff();
+  smooth->SetNumberOfIterations(100000); // clamped
+  EXPECT_EQ(smooth->GetNumberOfIterations(), 1000);
+  smooth->SetNumberOfIterations(2);
+  smooth->Update();
+  EXPECT_GT(smooth->GetOutput()->GetNumberOfCells(), 0);
+  // Without Material every cell is one body: the outer boundary is the surface.
+  vtkNew<vtkUnstructuredGrid> unlabelled;
+  unlabelled->ShallowCopy(cut->GetOutput());
+  unlabelled->GetCellData()->RemoveArray("Material");
+  vtkNew<stmBoundarySmooth> plain;
+  plain->SetInputData(unlabelled);
+  plain->Update();
+  EXPECT_TRUE(stmTest::CheckMesh<3>(plain->GetOutput(), Axes3, 1e-9).IsValid());
+  EXPECT_GT(plain->GetNumberOfMovedPoints(), 0);
+}
+
+} // namespace
