@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "stmBoundarySmooth.h"
 
+#include "stmCutInput.h"
+#include "stmPlaneFrame.h"
 #include "stmSMPExecutor.h"
 
 #include "Cut/LevelSetProjection.h"
@@ -37,123 +39,6 @@ vtkCxxSetObjectMacro(stmBoundarySmooth, ImplicitFunction, vtkImplicitFunction);
 
 namespace
 {
-/// The dimension of a mesh of only tetrahedra (3) or only triangles (2); 0 otherwise, with the
-/// offending cell type.
-int SimplexDimension(vtkUnstructuredGrid* input, int& offendingType)
-{
-  vtkUnsignedCharArray* types = input->GetCellTypesArray();
-  const vtkIdType cells = input->GetNumberOfCells();
-  const unsigned char first = types->GetValue(0);
-  offendingType = first;
-  if (first != VTK_TETRA && first != VTK_TRIANGLE)
-  {
-    return 0;
-  }
-  for (vtkIdType c = 1; c < cells; ++c)
-  {
-    if (types->GetValue(c) != first)
-    {
-      offendingType = types->GetValue(c);
-      return 0;
-    }
-  }
-  return first == VTK_TETRA ? 3 : 2;
-}
-
-/// The frame of the mesh's coordinates: Dim orthonormal axes from an origin. A triangle mesh
-/// in a coordinate plane uses two coordinate axes, so that its points are copied exactly.
-struct Frame
-{
-  double Origin[3] = { 0, 0, 0 };
-  double Axes[3][3] = { { 1, 0, 0 }, { 0, 1, 0 }, { 0, 0, 1 } };
-  int CoordinateAxes[3] = { 0, 1, 2 }; // -1: not a coordinate axis
-};
-
-/// The plane of a triangle mesh, or an error message when the triangles are not in a plane.
-std::string FindPlane(vtkUnstructuredGrid* input, Frame& frame)
-{
-  double bounds[6];
-  input->GetBounds(bounds);
-  const double diagonal = std::sqrt(
-    vtkMath::Distance2BetweenPoints(std::array<double, 3>{ bounds[0], bounds[2], bounds[4] }.data(),
-      std::array<double, 3>{ bounds[1], bounds[3], bounds[5] }.data()));
-  for (int flat = 0; flat < 3; ++flat)
-  {
-    if (bounds[2 * flat + 1] - bounds[2 * flat] <= 0.0)
-    {
-      int next = 0;
-      for (int axis = 0; axis < 3; ++axis)
-      {
-        if (axis != flat)
-        {
-          frame.CoordinateAxes[next++] = axis;
-        }
-      }
-      return "";
-    }
-  }
-  // A tilted plane: the normal of the largest triangle, checked against every point.
-  vtkPoints* points = input->GetPoints();
-  double best = 0.0, normal[3] = { 0, 0, 0 };
-  vtkCellArray* cells = input->GetCells();
-  vtkNew<vtkIdList> ids;
-  for (vtkIdType c = 0; c < input->GetNumberOfCells(); ++c)
-  {
-    cells->GetCellAtId(c, ids);
-    double a[3], b[3], d[3], u[3], v[3], n[3];
-    points->GetPoint(ids->GetId(0), a);
-    points->GetPoint(ids->GetId(1), b);
-    points->GetPoint(ids->GetId(2), d);
-    for (int k = 0; k < 3; ++k)
-    {
-      u[k] = b[k] - a[k];
-      v[k] = d[k] - a[k];
-    }
-    vtkMath::Cross(u, v, n);
-    const double area = vtkMath::Norm(n);
-    if (area > best)
-    {
-      best = area;
-      for (int k = 0; k < 3; ++k)
-      {
-        normal[k] = n[k] / area;
-      }
-      std::copy(a, a + 3, frame.Origin);
-    }
-  }
-  if (!(best > 0.0))
-  {
-    return "every triangle is degenerate";
-  }
-  for (vtkIdType p = 0; p < points->GetNumberOfPoints(); ++p)
-  {
-    double x[3];
-    points->GetPoint(p, x);
-    double offset = 0.0;
-    for (int k = 0; k < 3; ++k)
-    {
-      offset += (x[k] - frame.Origin[k]) * normal[k];
-    }
-    if (std::abs(offset) > 1e-9 * diagonal)
-    {
-      return "the triangles do not lie in a plane (point " + std::to_string(p) +
-        " is off it); only planar triangle meshes and tetrahedral meshes can be smoothed";
-    }
-  }
-  double helper[3] = { 1, 0, 0 };
-  if (std::abs(normal[0]) > 0.9)
-  {
-    helper[0] = 0;
-    helper[1] = 1;
-  }
-  vtkMath::Cross(normal, helper, frame.Axes[0]);
-  vtkMath::Normalize(frame.Axes[0]);
-  vtkMath::Cross(normal, frame.Axes[0], frame.Axes[1]);
-  vtkMath::Normalize(frame.Axes[1]);
-  frame.CoordinateAxes[0] = frame.CoordinateAxes[1] = -1;
-  return "";
-}
-
 struct SmoothRequest
 {
   stmBoundarySmooth* Filter;
@@ -161,53 +46,9 @@ struct SmoothRequest
   vtkUnstructuredGrid* Output;
   stm::BoundarySmoothOptions Options;
   vtkImplicitFunction* Function; // null: no projection
-  Frame Coordinates;
+  stmPlaneFrame Coordinates;
   stm::BoundarySmoothStats Stats;
 };
-
-template <int Dim>
-void ToFrame(const Frame& frame, const double x[3], double* local)
-{
-  for (int a = 0; a < Dim; ++a)
-  {
-    if (frame.CoordinateAxes[a] >= 0)
-    {
-      local[a] = x[frame.CoordinateAxes[a]];
-    }
-    else
-    {
-      local[a] = 0.0;
-      for (int k = 0; k < 3; ++k)
-      {
-        local[a] += (x[k] - frame.Origin[k]) * frame.Axes[a][k];
-      }
-    }
-  }
-}
-
-/// The 3D position of frame coordinates; `base` gives the coordinates no frame axis sets (the
-/// flat axis of a coordinate plane).
-template <int Dim>
-void FromFrame(const Frame& frame, const double* local, const double base[3], double x[3])
-{
-  if (Dim == 3 || frame.CoordinateAxes[0] >= 0)
-  {
-    std::copy(base, base + 3, x);
-    for (int a = 0; a < Dim; ++a)
-    {
-      x[frame.CoordinateAxes[a]] = local[a];
-    }
-    return;
-  }
-  for (int k = 0; k < 3; ++k)
-  {
-    x[k] = frame.Origin[k];
-    for (int a = 0; a < Dim; ++a)
-    {
-      x[k] += local[a] * frame.Axes[a][k];
-    }
-  }
-}
 
 template <int Dim, class IdType>
 stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
@@ -216,7 +57,7 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
   const vtkIdType points = input->GetNumberOfPoints();
   const vtkIdType cells = input->GetNumberOfCells();
   vtkPoints* inputPoints = input->GetPoints();
-  const Frame& frame = request.Coordinates;
+  const stmPlaneFrame& frame = request.Coordinates;
   std::vector<double> local(static_cast<std::size_t>(points) * Dim);
   vtkSMPTools::For(0, points,
     [&](vtkIdType begin, vtkIdType end)
@@ -225,7 +66,7 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
       {
         double x[3];
         inputPoints->GetPoint(p, x);
-        ToFrame<Dim>(frame, x, local.data() + p * Dim);
+        frame.ToCore<Dim>(x, local.data() + p * Dim);
       }
     });
   std::vector<std::int64_t> materials;
@@ -259,15 +100,11 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
   auto evaluate = [&](const double* position, double* gradient, const double* base)
   {
     double x[3], g[3];
-    FromFrame<Dim>(frame, position, base, x);
+    frame.Lift<Dim>(position, base, x);
     std::lock_guard<std::mutex> lock(evaluation);
     const double value = function->FunctionValue(x);
     function->FunctionGradient(x, g);
-    for (int a = 0; a < Dim; ++a) // the gradient's components along the frame's axes
-    {
-      gradient[a] =
-        frame.CoordinateAxes[a] >= 0 ? g[frame.CoordinateAxes[a]] : vtkMath::Dot(g, frame.Axes[a]);
-    }
+    frame.FlattenGradient<Dim>(g, gradient);
     return value;
   };
   auto projector = [&](std::int64_t id, double* position)
@@ -326,13 +163,13 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
       {
         double before[3], check[Dim], after[3];
         inputPoints->GetPoint(p, before);
-        ToFrame<Dim>(frame, before, check);
+        frame.ToCore<Dim>(before, check);
         if (std::equal(check, check + Dim, local.data() + p * Dim))
         {
           displacement->SetTuple3(p, 0.0, 0.0, 0.0);
           continue;
         }
-        FromFrame<Dim>(frame, local.data() + p * Dim, before, after);
+        frame.Lift<Dim>(local.data() + p * Dim, before, after);
         moved->SetPoint(p, after);
         moved->GetPoint(p, after); // in the stored precision
         displacement->SetTuple3(
@@ -408,14 +245,12 @@ int stmBoundarySmooth::RequestData(
   {
     return fail("the input mesh has no cells");
   }
-  int offendingType = 0;
-  const int dimension = SimplexDimension(input, offendingType);
+  std::string typeError;
+  const int dimension = stmCutInput::SimplexDimension(
+    input, "cut it with Marching Simplices or tetrahedralize it first", typeError);
   if (dimension == 0)
   {
-    return fail("the input must be a mesh of only tetrahedra or only triangles, but it has cells "
-                "of VTK type " +
-      std::to_string(offendingType) +
-      "; cut it with Marching Simplices or tetrahedralize it first");
+    return fail(typeError);
   }
   if (!(this->RelaxationFactor > 0.0 && this->RelaxationFactor <= 1.0))
   {
@@ -452,18 +287,16 @@ int stmBoundarySmooth::RequestData(
   request.Options.MaxConditionNumber = this->MaxConditionNumber;
   request.Options.MinDihedralAngle = this->MinDihedralAngle;
   request.Options.BackgroundMaterial = this->BackgroundMaterial;
-  if (dimension == 2)
+  std::string problem;
+  if (!request.Coordinates.Build(input, dimension,
+        "only planar triangle meshes and tetrahedral meshes can be smoothed", problem))
   {
-    const std::string problem = FindPlane(input, request.Coordinates);
-    if (!problem.empty())
-    {
-      return fail(problem);
-    }
+    return fail(problem);
   }
   // Float points receive exactly the validated positions only when the frame copies
   // coordinates (3D, or a coordinate plane).
   request.Options.SinglePrecision =
-    input->GetPoints()->GetDataType() == VTK_FLOAT && request.Coordinates.CoordinateAxes[0] >= 0;
+    input->GetPoints()->GetDataType() == VTK_FLOAT && request.Coordinates.CopiesCoordinates();
   this->UpdateProgress(0.05);
 
   vtkCellArray* cells = input->GetCells();

@@ -3,9 +3,9 @@
  * @brief   the input checks shared by the filters that work on a separating function of a
  *          simplicial mesh (private to the module)
  *
- * stmMarchingSimplices and stmVertexSnap accept the same meshes (only tetrahedra or only
- * triangles) and find the separating function the same way, so that a pipeline that works with
- * one works with the other.
+ * stmMarchingSimplices, stmVertexSnap and stmBoundarySmooth accept the same meshes (only
+ * tetrahedra or only triangles), and the first two find the separating function the same way,
+ * so that a pipeline that works with one works with the others.
  */
 
 #ifndef stmCutInput_h
@@ -44,6 +44,25 @@ inline int SimplexDimension(vtkUnstructuredGrid* input, int& offendingType)
   }
   return first == VTK_TETRA ? 3 : 2;
 }
+
+/// SimplexDimension with the error message the filters give: 0 with `error` set (ending with
+/// `remedy`, what the user can do) when the mesh has other cells.
+inline int SimplexDimension(vtkUnstructuredGrid* input, const char* remedy, std::string& error)
+{
+  int offendingType = 0;
+  const int dimension = SimplexDimension(input, offendingType);
+  if (dimension == 0)
+  {
+    error = "the input must be a mesh of only tetrahedra or only triangles, but it has cells of "
+            "VTK type " +
+      std::to_string(offendingType) + "; " + remedy;
+  }
+  return dimension;
+}
+
+/// What the cutting filters tell a user whose mesh is not simplicial.
+constexpr const char* TessellateSimplicialFirst =
+  "tessellate with Output Type Simplicial (or run Tetrahedralize) first";
 
 /// The separating function: `selected` and `association` as GetInputArrayToProcess(0, ...)
 /// returned them, `name` the selection's FIELD_NAME. When the selection names no array (a

@@ -483,19 +483,16 @@ int stmMarchingSimplices::RequestData(
   {
     return fail("the input mesh has no cells");
   }
-  int offendingType = 0;
-  const int dimension = stmCutInput::SimplexDimension(input, offendingType);
+  std::string error;
+  const int dimension =
+    stmCutInput::SimplexDimension(input, stmCutInput::TessellateSimplicialFirst, error);
   if (dimension == 0)
   {
-    return fail("the input must be a mesh of only tetrahedra or only triangles, but it has cells "
-                "of VTK type " +
-      std::to_string(offendingType) +
-      "; tessellate with Output Type Simplicial (or run Tetrahedralize) first");
+    return fail(error);
   }
   int association = -1;
   vtkDataArray* function = this->GetInputArrayToProcess(0, input, association);
   const char* name = this->GetInputArrayInformation(0)->Get(vtkDataObject::FIELD_NAME());
-  std::string error;
   function = stmCutInput::FindSeparatingFunction(function, association, name, input, error);
   if (!function)
   {

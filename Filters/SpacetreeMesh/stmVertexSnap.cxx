@@ -3,6 +3,7 @@
 
 #include "stmCutInput.h"
 #include "stmFunctionValues.h"
+#include "stmPlaneFrame.h"
 #include "stmSMPExecutor.h"
 #include "stmSurfaceFunction.h"
 
@@ -35,153 +36,6 @@ vtkCxxSetObjectMacro(stmVertexSnap, ImplicitFunction, vtkImplicitFunction);
 
 namespace
 {
-/// The core's Dim coordinates of the mesh points: 3D as they are; for triangles, two coordinates
-/// in their plane (the two other axes when the plane is orthogonal to an axis, so that moved
-/// points keep exact coordinates, else an orthonormal frame).
-template <int Dim>
-struct PlaneFrame
-{
-  vtkPoints* Points = nullptr;
-  int Axes[2] = { 0, 1 };
-  bool AxisAligned = true;
-  double Origin[3] = { 0, 0, 0 };
-  double U[3] = { 1, 0, 0 };
-  double W[3] = { 0, 1, 0 };
-
-  template <class IdType>
-  bool Build(vtkPoints* points, const IdType* connectivity, vtkIdType cells, std::string& error)
-  {
-    this->Points = points;
-    if (Dim == 3)
-    {
-      return true;
-    }
-    double normal[3] = { 0, 0, 0 };
-    for (vtkIdType cell = 0; cell < cells; ++cell)
-    {
-      double a[3], b[3], c[3], ab[3], ac[3], n[3];
-      points->GetPoint(connectivity[3 * cell], a);
-      points->GetPoint(connectivity[3 * cell + 1], b);
-      points->GetPoint(connectivity[3 * cell + 2], c);
-      vtkMath::Subtract(b, a, ab);
-      vtkMath::Subtract(c, a, ac);
-      vtkMath::Cross(ab, ac, n);
-      // Inconsistently oriented triangles must not cancel: align each with the sum so far.
-      const double sign = vtkMath::Dot(n, normal) < 0 ? -1.0 : 1.0;
-      for (int k = 0; k < 3; ++k)
-      {
-        normal[k] += sign * n[k];
-      }
-    }
-    if (vtkMath::Norm(normal) == 0.0)
-    {
-      error = "the triangles have no area";
-      return false;
-    }
-    points->GetPoint(0, this->Origin);
-    int zeros = 0, normalAxis = 0;
-    for (int k = 0; k < 3; ++k)
-    {
-      zeros += normal[k] == 0.0 ? 1 : 0;
-      normalAxis = normal[k] != 0.0 ? k : normalAxis;
-    }
-    this->AxisAligned = zeros == 2;
-    vtkMath::Normalize(normal);
-    if (this->AxisAligned)
-    {
-      this->Axes[0] = (normalAxis + 1) % 3;
-      this->Axes[1] = (normalAxis + 2) % 3;
-    }
-    else
-    {
-      vtkMath::Perpendiculars(normal, this->U, this->W, 0.0);
-    }
-    double bounds[6];
-    points->GetBounds(bounds);
-    const double tolerance = 1e-9 *
-      std::max(1.0,
-        std::sqrt((bounds[1] - bounds[0]) * (bounds[1] - bounds[0]) +
-          (bounds[3] - bounds[2]) * (bounds[3] - bounds[2]) +
-          (bounds[5] - bounds[4]) * (bounds[5] - bounds[4])));
-    for (vtkIdType p = 0; p < points->GetNumberOfPoints(); ++p)
-    {
-      double x[3], d[3];
-      points->GetPoint(p, x);
-      vtkMath::Subtract(x, this->Origin, d);
-      if (std::abs(vtkMath::Dot(d, normal)) > tolerance)
-      {
-        error = "the triangles do not lie in one plane (point " + std::to_string(p) +
-          " is off it); vertex snapping needs a planar triangle mesh";
-        return false;
-      }
-    }
-    return true;
-  }
-
-  void ToCore(const double x[3], double* core) const
-  {
-    if (Dim == 3)
-    {
-      std::copy(x, x + 3, core);
-    }
-    else if (this->AxisAligned)
-    {
-      core[0] = x[this->Axes[0]];
-      core[1] = x[this->Axes[1]];
-    }
-    else
-    {
-      double d[3];
-      vtkMath::Subtract(x, this->Origin, d);
-      core[0] = vtkMath::Dot(d, this->U);
-      core[1] = vtkMath::Dot(d, this->W);
-    }
-  }
-
-  /// The 3D position of point `point` moved to core coordinates: only its in-plane coordinates
-  /// change.
-  void Lift(vtkIdType point, const double* core, double x[3]) const
-  {
-    this->Points->GetPoint(point, x);
-    if (Dim == 3)
-    {
-      std::copy(core, core + 3, x);
-      return;
-    }
-    if (this->AxisAligned)
-    {
-      x[this->Axes[0]] = core[0];
-      x[this->Axes[1]] = core[1];
-      return;
-    }
-    double now[2];
-    this->ToCore(x, now);
-    for (int k = 0; k < 3; ++k)
-    {
-      x[k] += (core[0] - now[0]) * this->U[k] + (core[1] - now[1]) * this->W[k];
-    }
-  }
-
-  /// A 3D gradient as a gradient in the core coordinates (its in-plane part).
-  void FlattenGradient(const double gradient[3], double* core) const
-  {
-    if (Dim == 3)
-    {
-      std::copy(gradient, gradient + 3, core);
-    }
-    else if (this->AxisAligned)
-    {
-      core[0] = gradient[this->Axes[0]];
-      core[1] = gradient[this->Axes[1]];
-    }
-    else
-    {
-      core[0] = vtkMath::Dot(gradient, this->U);
-      core[1] = vtkMath::Dot(gradient, this->W);
-    }
-  }
-};
-
 struct SnapRequest
 {
   stmVertexSnap* Filter;
@@ -201,8 +55,8 @@ stm::Status Snap(SnapRequest& request, const IdType* connectivity, std::string& 
   vtkUnstructuredGrid* input = request.Input;
   vtkPoints* inputPoints = input->GetPoints();
   const vtkIdType numberOfPoints = input->GetNumberOfPoints();
-  PlaneFrame<Dim> frame;
-  if (!frame.Build(inputPoints, connectivity, input->GetNumberOfCells(), error))
+  stmPlaneFrame frame;
+  if (!frame.Build(input, Dim, "vertex snapping needs a planar triangle mesh", error))
   {
     return stm::Status::Invalid(error);
   }
@@ -214,7 +68,7 @@ stm::Status Snap(SnapRequest& request, const IdType* connectivity, std::string& 
       {
         double x[3];
         inputPoints->GetPoint(p, x);
-        frame.ToCore(x, coordinates.data() + p * Dim);
+        frame.ToCore<Dim>(x, coordinates.data() + p * Dim);
       }
     });
 
@@ -234,14 +88,15 @@ stm::Status Snap(SnapRequest& request, const IdType* connectivity, std::string& 
     projection.MaxDistance = std::max(input->GetLength(), 1e-300);
     auto projector = [&](std::int64_t point, const double*, const double* target, double* result)
     {
-      double x[Dim];
+      double x[Dim], original[3];
       std::copy(target, target + Dim, x);
+      inputPoints->GetPoint(static_cast<vtkIdType>(point), original);
       auto evaluate = [&](const double* y, double* gradient)
       {
         double position[3], spatialGradient[3];
-        frame.Lift(static_cast<vtkIdType>(point), y, position);
+        frame.Lift<Dim>(y, original, position);
         const double value = surface->EvaluateWithGradient(position, spatialGradient);
-        frame.FlattenGradient(spatialGradient, gradient);
+        frame.FlattenGradient<Dim>(spatialGradient, gradient);
         return value;
       };
       if (!stm::ProjectToLevelSet<Dim>(x, evaluate, projection))
@@ -274,8 +129,9 @@ stm::Status Snap(SnapRequest& request, const IdType* connectivity, std::string& 
   {
     if (request.Moved[p] == 1)
     {
-      double x[3];
-      frame.Lift(p, coordinates.data() + p * Dim, x);
+      double original[3], x[3];
+      inputPoints->GetPoint(p, original);
+      frame.Lift<Dim>(coordinates.data() + p * Dim, original, x);
       request.MovedPoints.push_back(p);
       request.MovedPositions.insert(request.MovedPositions.end(), x, x + 3);
     }
@@ -365,19 +221,16 @@ int stmVertexSnap::RequestData(
   {
     return fail("the input mesh has no cells");
   }
-  int offendingType = 0;
-  const int dimension = stmCutInput::SimplexDimension(input, offendingType);
+  std::string error;
+  const int dimension =
+    stmCutInput::SimplexDimension(input, stmCutInput::TessellateSimplicialFirst, error);
   if (dimension == 0)
   {
-    return fail("the input must be a mesh of only tetrahedra or only triangles, but it has cells "
-                "of VTK type " +
-      std::to_string(offendingType) +
-      "; tessellate with Output Type Simplicial (or run Tetrahedralize) first");
+    return fail(error);
   }
   int association = -1;
   vtkDataArray* function = this->GetInputArrayToProcess(0, input, association);
   const char* name = this->GetInputArrayInformation(0)->Get(vtkDataObject::FIELD_NAME());
-  std::string error;
   function = stmCutInput::FindSeparatingFunction(function, association, name, input, error);
   if (!function)
   {
