@@ -24,7 +24,6 @@
 
 namespace
 {
-const char* const AalPath = "/usr/share/mricron/templates/aal.nii.gz";
 
 std::vector<int> CellSizes(vtkUnstructuredGrid* tree)
 {
@@ -73,7 +72,7 @@ protected:
     PreviousBackend = vtkSMPTools::GetBackend();
     vtkSMPTools::SetBackend("STDThread");
     Reader = vtkNIFTIImageReader::New();
-    Reader->SetFileName(AalPath);
+    Reader->SetFileName(stmTest::AalAtlasPath);
     Resample = vtkExtractVOI::New();
     Resample->SetInputConnection(Reader->GetOutputPort());
     Resample->SetSampleRate(1, 1, 2);
@@ -98,9 +97,9 @@ std::string AnisotropicAtlas::PreviousBackend;
 /// AAL at 1 x 1 x 2 mm: "auto" against 2x2x2 with the Checkerboard template.
 TEST_P(AnisotropicAtlas, AutomaticPatternBeatsIsotropicRefinement)
 {
-  if (!std::ifstream(AalPath).good())
+  if (!std::ifstream(stmTest::AalAtlasPath).good())
   {
-    GTEST_SKIP() << AalPath << " is missing; install Debian's mricron-data";
+    GTEST_SKIP() << stmTest::AalAtlasPath << " is missing; install Debian's mricron-data";
   }
   vtkImageData* image = Resample->GetOutput();
   int dims[3];

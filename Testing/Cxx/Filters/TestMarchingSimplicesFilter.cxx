@@ -39,7 +39,6 @@
 
 namespace
 {
-const char* const AalPath = "/usr/share/mricron/templates/aal.nii.gz";
 const char* const GrayPath = "/usr/share/mricron/templates/ch2bet.nii.gz";
 const int Axes3[3] = { 0, 1, 2 };
 const int Axes2[2] = { 0, 1 };
@@ -91,27 +90,15 @@ double VolumeOfMaterial(const stm::MeshInvariantReport& report, int material)
 // quality before snapping, reported.
 TEST(MarchingSimplicesFilter, AalBrainMaskWithTheDefaultFunction)
 {
-  if (!std::ifstream(AalPath).good())
+  if (!std::ifstream(stmTest::AalAtlasPath).good())
   {
-    GTEST_SKIP() << AalPath << " is missing; install Debian's mricron-data";
+    GTEST_SKIP() << stmTest::AalAtlasPath << " is missing; install Debian's mricron-data";
   }
-  vtkNew<vtkNIFTIImageReader> reader;
-  reader->SetFileName(AalPath);
-  vtkNew<vtkImageThreshold> mask; // every non-zero label -> 1
-  mask->SetInputConnection(reader->GetOutputPort());
-  mask->ThresholdByUpper(1); // integer labels: a fractional threshold would round to 0
-  mask->SetInValue(1);
-  mask->SetOutValue(0);
-  mask->ReplaceInOn();
-  mask->ReplaceOutOn();
-  mask->SetOutputScalarTypeToUnsignedChar();
-  mask->Update();
-  long long bodyVoxels = stmTest::CountLabels(mask->GetOutput())[1];
-  const double* spacing = mask->GetOutput()->GetSpacing();
-  const double voxelVolume = static_cast<double>(bodyVoxels) * spacing[0] * spacing[1] * spacing[2];
+  stmTest::AalBrainMask mask;
+  const double voxelVolume = mask.VoxelVolume;
 
   vtkNew<stmImageToSpacetree> tree;
-  tree->SetInputConnection(mask->GetOutputPort());
+  tree->SetInputConnection(mask.GetOutputPort());
   vtkNew<stmSpacetreeBalance> balance;
   balance->SetInputConnection(tree->GetOutputPort());
   vtkNew<stmSpacetreeTessellate> tessellate;

@@ -44,7 +44,6 @@
 
 namespace
 {
-const char* const AalPath = "/usr/share/mricron/templates/aal.nii.gz";
 const int Axes3[3] = { 0, 1, 2 };
 const int Axes2[2] = { 0, 1 };
 
@@ -500,26 +499,14 @@ TEST(VertexSnapFilter, NudgedPointsAreMarkedAndCounted)
 // volume within 1% of the voxels'; the figures of docs/marching-simplices.md printed.
 TEST(VertexSnapFilter, AalBrainMask)
 {
-  if (!std::ifstream(AalPath).good())
+  if (!std::ifstream(stmTest::AalAtlasPath).good())
   {
-    GTEST_SKIP() << AalPath << " is missing; install Debian's mricron-data";
+    GTEST_SKIP() << stmTest::AalAtlasPath << " is missing; install Debian's mricron-data";
   }
-  vtkNew<vtkNIFTIImageReader> reader;
-  reader->SetFileName(AalPath);
-  vtkNew<vtkImageThreshold> mask;
-  mask->SetInputConnection(reader->GetOutputPort());
-  mask->ThresholdByUpper(1);
-  mask->SetInValue(1);
-  mask->SetOutValue(0);
-  mask->ReplaceInOn();
-  mask->ReplaceOutOn();
-  mask->SetOutputScalarTypeToUnsignedChar();
-  mask->Update();
-  const long long bodyVoxels = stmTest::CountLabels(mask->GetOutput())[1];
-  const double* spacing = mask->GetOutput()->GetSpacing();
-  const double voxelVolume = static_cast<double>(bodyVoxels) * spacing[0] * spacing[1] * spacing[2];
+  stmTest::AalBrainMask mask;
+  const double voxelVolume = mask.VoxelVolume;
   vtkNew<stmImageToSpacetree> tree;
-  tree->SetInputConnection(mask->GetOutputPort());
+  tree->SetInputConnection(mask.GetOutputPort());
   vtkNew<stmSpacetreeBalance> balance;
   balance->SetInputConnection(tree->GetOutputPort());
   vtkNew<stmSpacetreeTessellate> tessellate;

@@ -22,6 +22,8 @@
 #include "vtkDataSet.h"
 #include "vtkIdList.h"
 #include "vtkImageData.h"
+#include "vtkImageThreshold.h"
+#include "vtkNIFTIImageReader.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
 #include "vtkPoints.h"
@@ -115,6 +117,35 @@ inline std::map<long long, long long> CountLabels(vtkImageData* image)
   }
   return counts;
 }
+
+/// Debian's mricron-data atlas: 116 labels, 181 x 217 x 181 voxels of 1 mm.
+constexpr const char* AalAtlasPath = "/usr/share/mricron/templates/aal.nii.gz";
+
+/// The AAL brain mask: every non-zero label of the atlas becomes label 1, and the voxel volume
+/// of the body is what a mesh of it should enclose.
+struct AalBrainMask
+{
+  vtkNew<vtkNIFTIImageReader> Reader;
+  vtkNew<vtkImageThreshold> Mask;
+  double VoxelVolume = 0.0;
+
+  AalBrainMask()
+  {
+    this->Reader->SetFileName(AalAtlasPath);
+    this->Mask->SetInputConnection(this->Reader->GetOutputPort());
+    this->Mask->ThresholdByUpper(1); // integer labels: a fractional threshold would round to 0
+    this->Mask->SetInValue(1);
+    this->Mask->SetOutValue(0);
+    this->Mask->ReplaceInOn();
+    this->Mask->ReplaceOutOn();
+    this->Mask->SetOutputScalarTypeToUnsignedChar();
+    this->Mask->Update();
+    const long long bodyVoxels = CountLabels(this->Mask->GetOutput())[1];
+    const double* spacing = this->Mask->GetOutput()->GetSpacing();
+    this->VoxelVolume = static_cast<double>(bodyVoxels) * spacing[0] * spacing[1] * spacing[2];
+  }
+  vtkAlgorithmOutput* GetOutputPort() { return this->Mask->GetOutputPort(); }
+};
 
 struct Pipeline
 {
