@@ -10,8 +10,10 @@
 #include "Balance/SpacetreeBalance.h"
 #include "Check/MeshInvariants.h"
 #include "Common/CubeInfo.h"
+#include "Common/Determinant.h"
 #include "Common/Execution.h"
 #include "Common/Status.h"
+#include "Cut/MarchingSimplices.h"
 #include "Spacetree/Spacetree.h"
 #include "Spacetree/SpacetreeBuild.h"
 #include "Tessellate/SpacetreeTessellation.h"
@@ -852,6 +854,83 @@ void ExpectMeshMatchesVoxelModel(
   EXPECT_EQ(exact.ScaledBoundaryMeasure, faces * ScaledVoxelFace<D>()) << "exact boundary";
   EXPECT_TRUE(CheckerMeasureMatches(report.BoundaryMeasure, static_cast<double>(faces)))
     << "checker boundary";
+}
+
+/// Signed volume times d! of a simplex given as d + 1 points of D coordinates.
+template <int D>
+double ScaledVolume(const std::vector<double>& coordinates, const std::int64_t* ids)
+{
+  double m[D][D];
+  for (int r = 0; r < D; ++r)
+  {
+    for (int c = 0; c < D; ++c)
+    {
+      m[r][c] = coordinates[ids[r + 1] * D + c] - coordinates[ids[0] * D + c];
+    }
+  }
+  return stm::Determinant<D>(m);
+}
+
+/// A simplicial mesh cut by marching simplices, with the cut vertices' coordinates and values.
+template <int D>
+struct CutResult
+{
+  stm::Status Result;
+  std::vector<double> Coordinates; // input points, then cut vertices
+  std::vector<double> Values;
+  std::vector<std::int64_t> Connectivity;
+  std::vector<std::int64_t> Parents;
+  std::vector<std::uint8_t> Sides;
+  std::vector<std::int64_t> Surface;
+  std::vector<std::int64_t> SurfaceParents;
+  std::int64_t SplitCells = 0;
+  std::int64_t CutEdges = 0;
+
+  std::int64_t GetNumberOfCells() const { return static_cast<std::int64_t>(this->Sides.size()); }
+};
+
+template <int D, class Executor, class AllZeroSide>
+CutResult<D> Cut(const std::vector<double>& coordinates, const std::vector<double>& values,
+  const std::vector<std::int64_t>& connectivity, const stm::MarchingSimplicesOptions& options,
+  Executor& executor, AllZeroSide allZeroSide)
+{
+  CutResult<D> result;
+  stm::MarchingSimplices<D> cutter;
+  const auto points = static_cast<std::int64_t>(values.size());
+  const auto cells = static_cast<std::int64_t>(connectivity.size()) / (D + 1);
+  result.Result = cutter.Classify(
+    values.data(), points, connectivity.data(), cells, options, allZeroSide, executor);
+  if (!result.Result.IsOk())
+  {
+    return result;
+  }
+  const std::int64_t outputCells = cutter.GetNumberOfCells();
+  result.Connectivity.assign(static_cast<std::size_t>(outputCells * (D + 1)), -1);
+  result.Parents.assign(static_cast<std::size_t>(outputCells), -1);
+  result.Sides.assign(static_cast<std::size_t>(outputCells), 0xFF);
+  result.Result = cutter.WriteCells(connectivity.data(), result.Connectivity.data(),
+    result.Parents.data(), result.Sides.data(), executor);
+  if (!result.Result.IsOk())
+  {
+    return result;
+  }
+  result.Result =
+    cutter.ExtractSurface(connectivity.data(), result.Surface, result.SurfaceParents, executor);
+  result.Coordinates = coordinates;
+  result.Values = values;
+  for (const stm::CutEdge& edge : cutter.GetCutEdges())
+  {
+    for (int axis = 0; axis < D; ++axis)
+    {
+      result.Coordinates.push_back(
+        (1.0 - edge.T) * coordinates[edge.A * D + axis] + edge.T * coordinates[edge.B * D + axis]);
+    }
+    result.Values.push_back((1.0 - edge.T) * (values[edge.A] - options.IsoValue) +
+      edge.T * (values[edge.B] - options.IsoValue) + options.IsoValue);
+  }
+  result.SplitCells = cutter.GetNumberOfSplitCells();
+  result.CutEdges = static_cast<std::int64_t>(cutter.GetCutEdges().size());
+  return result;
 }
 
 } // namespace stmtest

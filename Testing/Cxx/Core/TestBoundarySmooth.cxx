@@ -70,35 +70,15 @@ SimplicialMesh<D> UniformMesh(std::int64_t extent, const LabelImage<D>& image, b
 template <int D>
 void CutMesh(const SimplicialMesh<D>& mesh, const std::vector<double>& values, SmoothMesh<D>& out)
 {
-  const std::vector<double> coordinates = mesh.Coordinates();
-  const std::int64_t points = mesh.GetNumberOfPoints();
   stm::SequentialExecutor executor;
-  stm::MarchingSimplices<D> cutter;
   auto allZeroSide = [&](std::int64_t cell)
   { return mesh.Materials[cell] == 0 ? stm::CutSide::Outside : stm::CutSide::Inside; };
-  EXPECT_TRUE(
-    cutter
-      .Classify(values.data(), points, mesh.Connectivity.data(), mesh.GetNumberOfSimplices(),
-        stm::MarchingSimplicesOptions(), allZeroSide, executor)
-      .IsOk());
-  const std::int64_t cells = cutter.GetNumberOfCells();
-  out.Cells.resize(static_cast<std::size_t>(cells * (D + 1)));
-  std::vector<std::int64_t> parents(static_cast<std::size_t>(cells));
-  std::vector<std::uint8_t> sides(static_cast<std::size_t>(cells));
-  EXPECT_TRUE(cutter
-                .WriteCells(mesh.Connectivity.data(), out.Cells.data(), parents.data(),
-                  sides.data(), executor)
-                .IsOk());
-  out.Points = coordinates;
-  for (const stm::CutEdge& edge : cutter.GetCutEdges())
-  {
-    for (int axis = 0; axis < D; ++axis)
-    {
-      out.Points.push_back(
-        (1.0 - edge.T) * coordinates[edge.A * D + axis] + edge.T * coordinates[edge.B * D + axis]);
-    }
-  }
-  for (const std::uint8_t side : sides)
+  const CutResult<D> cut = Cut<D>(mesh.Coordinates(), values, mesh.Connectivity,
+    stm::MarchingSimplicesOptions(), executor, allZeroSide);
+  EXPECT_TRUE(cut.Result.IsOk());
+  out.Cells = cut.Connectivity;
+  out.Points = cut.Coordinates;
+  for (const std::uint8_t side : cut.Sides)
   {
     out.Materials.push_back(side == static_cast<std::uint8_t>(stm::CutSide::Inside) ? 1 : 0);
   }

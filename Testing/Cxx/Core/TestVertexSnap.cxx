@@ -67,73 +67,30 @@ SnapRun<D> Snap(const std::vector<double>& points, const std::vector<double>& va
   return Snap<D>(points, values, cells, options, executor);
 }
 
+/// The cut MarchingSimplices makes, with the snap's zero tolerance.
 template <int D>
-double CellDeterminant(const std::vector<double>& points, const std::int64_t* ids)
-{
-  double m[D][D];
-  for (int r = 0; r < D; ++r)
-  {
-    for (int c = 0; c < D; ++c)
-    {
-      m[r][c] = points[ids[c + 1] * D + r] - points[ids[0] * D + r];
-    }
-  }
-  return stm::Determinant<D>(m);
-}
-
-/// The mesh MarchingSimplices makes: its cells and the cut vertices' coordinates.
-template <int D>
-struct CutMesh
-{
-  std::vector<double> Points;
-  std::vector<std::int64_t> Cells;
-  std::int64_t CutEdges = 0;
-};
-
-template <int D>
-CutMesh<D> Cut(const std::vector<double>& points, const std::vector<double>& values,
+CutResult<D> Cut(const std::vector<double>& points, const std::vector<double>& values,
   const std::vector<std::int64_t>& cells)
 {
-  stm::MarchingSimplices<D> cutter;
   stm::MarchingSimplicesOptions options;
   options.ZeroTolerance = stm::VertexSnapOptions().ZeroTolerance;
   stm::SequentialExecutor executor;
-  CutMesh<D> mesh;
-  EXPECT_TRUE(cutter
-                .Classify(
-                  values.data(), static_cast<std::int64_t>(values.size()), cells.data(),
-                  static_cast<std::int64_t>(cells.size()) / (D + 1), options,
-                  [](std::int64_t) { return stm::CutSide::Inside; }, executor)
-                .IsOk());
-  mesh.Cells.resize(static_cast<std::size_t>(cutter.GetNumberOfCells() * (D + 1)));
-  std::vector<std::int64_t> parents(static_cast<std::size_t>(cutter.GetNumberOfCells()));
-  std::vector<std::uint8_t> sides(parents.size());
-  EXPECT_TRUE(
-    cutter.WriteCells(cells.data(), mesh.Cells.data(), parents.data(), sides.data(), executor)
-      .IsOk());
-  mesh.Points = points;
-  for (const stm::CutEdge& edge : cutter.GetCutEdges())
-  {
-    for (int c = 0; c < D; ++c)
-    {
-      mesh.Points.push_back(
-        (1.0 - edge.T) * points[edge.A * D + c] + edge.T * points[edge.B * D + c]);
-    }
-  }
-  mesh.CutEdges = static_cast<std::int64_t>(cutter.GetCutEdges().size());
-  return mesh;
+  CutResult<D> result = stmtest::Cut<D>(
+    points, values, cells, options, executor, [](std::int64_t) { return stm::CutSide::Inside; });
+  EXPECT_TRUE(result.Result.IsOk());
+  return result;
 }
 
 template <int D>
-double WorstCondition(const CutMesh<D>& mesh)
+double WorstCondition(const CutResult<D>& mesh)
 {
   double worst = 0.0;
-  for (std::size_t cell = 0; cell < mesh.Cells.size() / (D + 1); ++cell)
+  for (std::size_t cell = 0; cell < mesh.Connectivity.size() / (D + 1); ++cell)
   {
     const double* corners[D + 1];
     for (int k = 0; k <= D; ++k)
     {
-      corners[k] = mesh.Points.data() + mesh.Cells[cell * (D + 1) + k] * D;
+      corners[k] = mesh.Coordinates.data() + mesh.Connectivity[cell * (D + 1) + k] * D;
     }
     worst = std::max(worst, stm::MeasureSimplex<D>(corners).Condition);
   }
@@ -179,10 +136,10 @@ TEST(VertexSnap, TetrahedronSnapsToTheExactIntersection)
   EXPECT_EQ(run.Points, (std::vector<double>{ 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0.875 }));
   EXPECT_EQ(run.Values, (std::vector<double>{ 7, 7, 7, 0 }));
   EXPECT_EQ(run.Moved, (std::vector<std::uint8_t>{ 0, 0, 0, 1 }));
-  EXPECT_GT(CellDeterminant<3>(run.Points, cells.data()), 0.0);
-  const CutMesh<3> cut = Cut<3>(run.Points, run.Values, cells);
+  EXPECT_GT(ScaledVolume<3>(run.Points, cells.data()), 0.0);
+  const CutResult<3> cut = Cut<3>(run.Points, run.Values, cells);
   EXPECT_EQ(cut.CutEdges, 0);
-  EXPECT_EQ(cut.Cells.size(), 4u);
+  EXPECT_EQ(cut.Connectivity.size(), 4u);
 
   // A positive vertex snaps too, towards the negative end (t measured from there: 1 - 1/5).
   const SnapRun<3> positive = Snap<3>(points, { -4, -4, 1, -4 }, cells, Third);
@@ -239,8 +196,8 @@ TEST(VertexSnap, NudgesARefusedTetrahedronVertex)
   // Tetrahedron (0, 1, 2, 3) with 1, 2, 3 on the surface, and (0, 2, 1, 4) below it.
   const std::vector<double> points{ 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1 };
   const std::vector<std::int64_t> cells{ 0, 1, 2, 3, 0, 2, 1, 4 };
-  ASSERT_GT(CellDeterminant<3>(points, cells.data()), 0.0);
-  ASSERT_GT(CellDeterminant<3>(points, cells.data() + 4), 0.0);
+  ASSERT_GT(ScaledVolume<3>(points, cells.data()), 0.0);
+  ASSERT_GT(ScaledVolume<3>(points, cells.data() + 4), 0.0);
   // Edge 0-4 cut 1/10 from vertex 0: refused (cell 0 would be all zero), nudged to 0.5 * 9.
   const SnapRun<3> run = Snap<3>(points, { 1, 0, 0, 0, -9 }, cells, Third);
   ASSERT_TRUE(run.Result.IsOk());
@@ -268,7 +225,7 @@ TEST(VertexSnap, RefusesToInvertACell)
   const std::vector<std::int64_t> cells{ 0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 5, 0, 5, 6, 0, 6, 1 };
   for (std::size_t c = 0; c < cells.size() / 3; ++c)
   {
-    ASSERT_GT(CellDeterminant<2>(points, cells.data() + 3 * c), 0.0) << "cell " << c;
+    ASSERT_GT(ScaledVolume<2>(points, cells.data() + 3 * c), 0.0) << "cell " << c;
   }
   const std::vector<double> values{ -1, 4, 2, 2, 2, 2, 2 };
   const SnapRun<2> run = Snap<2>(points, values, cells, Third);
@@ -469,7 +426,7 @@ TYPED_TEST(VertexSnapMeshTest, RandomFieldsGiveValidMeshesWithFewerCells)
     const SimplicialMesh<D> mesh = AdaptiveMesh<D>(seed, extent);
     const std::vector<double> points = mesh.Coordinates();
     const std::vector<double> values = RandomField<D>(points, static_cast<double>(extent), seed);
-    const CutMesh<D> unsnapped = Cut<D>(points, values, mesh.Connectivity);
+    const CutResult<D> unsnapped = Cut<D>(points, values, mesh.Connectivity);
     const double unsnappedWorst = WorstCondition<D>(unsnapped);
     ASSERT_GT(unsnapped.CutEdges, 0);
     const std::int64_t allZeroBefore = CountAllZeroCells<D>(values, mesh.Connectivity);
@@ -503,7 +460,7 @@ TYPED_TEST(VertexSnapMeshTest, RandomFieldsGiveValidMeshesWithFewerCells)
       for (std::int64_t cell = 0; cell < mesh.GetNumberOfSimplices(); ++cell)
       {
         nonPositive +=
-          CellDeterminant<D>(run.Points, mesh.Connectivity.data() + cell * (D + 1)) > 0 ? 0 : 1;
+          ScaledVolume<D>(run.Points, mesh.Connectivity.data() + cell * (D + 1)) > 0 ? 0 : 1;
       }
       EXPECT_EQ(nonPositive, 0);
       EXPECT_EQ(CountAllZeroCells<D>(run.Values, mesh.Connectivity), allZeroBefore);
@@ -538,11 +495,11 @@ TYPED_TEST(VertexSnapMeshTest, RandomFieldsGiveValidMeshesWithFewerCells)
       }
 
       // The cut makes no more cells than without snapping.
-      const CutMesh<D> snapped = Cut<D>(run.Points, run.Values, mesh.Connectivity);
-      EXPECT_LE(snapped.Cells.size(), unsnapped.Cells.size());
+      const CutResult<D> snapped = Cut<D>(run.Points, run.Values, mesh.Connectivity);
+      EXPECT_LE(snapped.Connectivity.size(), unsnapped.Connectivity.size());
       EXPECT_LT(snapped.CutEdges, unsnapped.CutEdges);
       const stm::MeshInvariantReport cutReport =
-        stm::CheckSimplicialMesh<D>(snapped.Points, snapped.Cells, nullptr);
+        stm::CheckSimplicialMesh<D>(snapped.Coordinates, snapped.Connectivity, nullptr);
       EXPECT_TRUE(cutReport.IsValid()) << cutReport.Summary();
 
       if (snapCase.Alpha == 0.5)
@@ -634,10 +591,11 @@ TYPED_TEST(VertexSnapSmokeTest, SnapsAndKeepsCellsPositive)
     EXPECT_GT(run.Counts.Snapped, 0);
     for (std::int64_t cell = 0; cell < mesh.GetNumberOfSimplices(); ++cell)
     {
-      ASSERT_GT(CellDeterminant<D>(run.Points, mesh.Connectivity.data() + cell * (D + 1)), 0.0);
+      ASSERT_GT(ScaledVolume<D>(run.Points, mesh.Connectivity.data() + cell * (D + 1)), 0.0);
     }
-    const CutMesh<D> snapped = Cut<D>(run.Points, run.Values, mesh.Connectivity);
-    EXPECT_LE(snapped.Cells.size(), Cut<D>(points, values, mesh.Connectivity).Cells.size());
+    const CutResult<D> snapped = Cut<D>(run.Points, run.Values, mesh.Connectivity);
+    EXPECT_LE(
+      snapped.Connectivity.size(), Cut<D>(points, values, mesh.Connectivity).Connectivity.size());
     stm::ThreadPoolExecutor threads(4);
     const SnapRun<D> threaded = Snap<D>(points, values, mesh.Connectivity, options, threads);
     EXPECT_EQ(threaded.Points, run.Points);
