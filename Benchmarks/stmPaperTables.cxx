@@ -586,8 +586,10 @@ int Main(int argc, char* argv[])
   }
   doc << "### QualityDriven\n\n";
   doc << "`SnapRule` QUALITY_DRIVEN ignores Alpha: the nearer end of every cut edge snaps unless "
-         "that makes the elements around it worse than the cut's. Next to it: THRESHOLD at "
-         "Alpha = 1/3 and the paper at 0.33, and the snapped points and refused snaps.\n\n";
+         "that makes the elements around it worse than the cut's, and the points whose cells end "
+         "with a piece above condition number 2.5 choose again once their neighbours have "
+         "decided. Next to it: THRESHOLD at Alpha = 1/3 and the paper at 0.33, and the snapped "
+         "points and refused snaps.\n\n";
   doc << "| n | QualityDriven, Edge | QualityDriven, Function | Threshold 1/3, Edge | Threshold "
          "1/3, Function | paper, 0.33 | snapped / refused (QualityDriven, Edge) |\n"
       << "|---|---|---|---|---|---|---|\n";
@@ -650,7 +652,8 @@ int Main(int argc, char* argv[])
     }
     doc << ".\n";
   }
-  doc << "\n";
+  doc << "\nWhy a goal is missed (the paper's ball is not known; the prism at n = 5): "
+         "docs/snapping-and-smoothing.md, \"What is missed, and why\".\n\n";
 
   // Smoothing (section 3.4).
   const int smoothN = std::min(20, maxN);

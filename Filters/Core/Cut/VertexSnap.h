@@ -27,7 +27,8 @@
 //   incident cells (ties: snap, nearest edge first, then keep the cut; a nudge must be strictly
 //   better). The simplices are those MarchingSimplices would write (the same pulling
 //   triangulation in global vertex order), so every decision keeps the worst element of the
-//   cut mesh from growing.
+//   cut mesh from growing. Later decisions next to a point can still make its cells worse, so
+//   the rounds are followed by revisits (at the end of Snap).
 //
 // Nudging: a vertex whose snap is refused would leave cuts closer than Alpha to it (the very
 // slivers snapping avoids). Instead its f is pushed away from the iso-value (its sign and place
@@ -101,6 +102,9 @@ struct VertexSnapCounts
   /// where they are, and are counted among the refused as well): see VertexSnap.
   std::int64_t Nudged = 0;
   std::int64_t Rounds = 0;
+  /// QualityDriven: decisions changed when revisited, and the rounds of revisiting.
+  std::int64_t Revised = 0;
+  std::int64_t RevisionRounds = 0;
 
   std::int64_t Refused() const
   {
@@ -186,6 +190,10 @@ private:
   /// QualityDriven ignores Alpha; its nudge keeps cuts at least this far from the point (0.4
   /// measured best on the AAL brain mask among 1/3, 0.4 and 0.45).
   static constexpr double QualityDrivenNudgeAlpha = 0.4;
+  /// QualityDriven revisits the points whose cells have a piece of condition number above
+  /// this, each at most MaxRevisions times.
+  static constexpr double RevisitAbove = 2.5;
+  static constexpr std::uint8_t MaxRevisions = 3;
 
   struct Claim
   {
@@ -601,6 +609,20 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     }
   }
   std::vector<std::uint8_t>().swap(active);
+  // QualityDriven revisits decisions (below): the active points' first places and values.
+  std::vector<std::int64_t> activePoints;
+  std::vector<double> originals; // Dim coordinates and the value per active point
+  if (qualityDriven)
+  {
+    activePoints = candidates;
+    originals.resize(activePoints.size() * (Dim + 1));
+    for (std::size_t i = 0; i < activePoints.size(); ++i)
+    {
+      const std::int64_t p = activePoints[i];
+      std::copy(points + p * Dim, points + (p + 1) * Dim, originals.data() + i * (Dim + 1));
+      originals[i * (Dim + 1) + Dim] = values[p];
+    }
+  }
   // claims[p] is valid for candidates only; a point that leaves the list never returns.
   std::vector<std::uint8_t> isCandidate(static_cast<std::size_t>(numberOfPoints), 0);
   auto refreshClaims = [&](const std::vector<std::int64_t>& list, const std::uint8_t* onlyNear)
@@ -814,6 +836,53 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     values[v] = iso;
     classes[v] = static_cast<std::int8_t>(VertexClass::Zero);
   };
+  // QualityDriven's options for v from its present place and value (its cut edges in `edges`)
+  // against staying, whose worst is `best`: the best snap along a cut edge of distance <= 1/2
+  // (one as good as staying wins when snapOnTie), else a nudge strictly better than staying.
+  // Returns Snapped with `position`, or the reason no snap was taken, with `value` nudged or
+  // left; `best` becomes the chosen option's worst.
+  auto improve = [&](std::int64_t v, const std::vector<Claim>& edges, bool allZero, bool snapOnTie,
+                   double& best, double* position, double& value) -> Outcome
+  {
+    Outcome outcome = allZero ? AllZero : NonPositive;
+    bool snap = false;
+    double candidate[Dim];
+    for (std::size_t e = 0; e < edges.size() && !allZero; ++e)
+    {
+      if (!(edges[e].Distance <= 0.5))
+      {
+        break;
+      }
+      snapTarget(v, edges[e].Other, candidate);
+      if (!keepsOrientation(v, candidate))
+      {
+        continue;
+      }
+      outcome = WorseQuality;
+      const double snapped = localWorst(v, candidate, iso);
+      if (snap || !snapOnTie ? snapped < best : snapped <= best)
+      {
+        best = snapped;
+        snap = true;
+        std::copy(candidate, candidate + Dim, position);
+      }
+    }
+    if (snap)
+    {
+      return Snapped;
+    }
+    const double nudged = nudgedValue(v, edges);
+    if (nudged != values[v])
+    {
+      const double worst = localWorst(v, points + v * Dim, nudged);
+      if (worst < best)
+      {
+        best = worst;
+        value = nudged;
+      }
+    }
+    return outcome;
+  };
   auto Decide = [&](std::int64_t v, std::vector<Claim>& edges) -> std::uint8_t
   {
     collectEdges(v, edges);
@@ -854,41 +923,29 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     // QualityDriven: the best of keeping the cut, snapping along one of the cut edges of
     // distance <= 1/2 and nudging; on a tie, snapping (the nearest edge first), then cutting.
     double best = localWorst(v, x, values[v]);
-    Outcome outcome = allZero ? AllZero : NonPositive;
-    bool snap = false;
-    double chosen[Dim];
-    for (std::size_t e = 0; e < edges.size() && !allZero; ++e)
+    double value = values[v];
+    const Outcome outcome = improve(v, edges, allZero, true, best, position, value);
+    if (outcome == Snapped)
     {
-      if (!(edges[e].Distance <= 0.5))
-      {
-        break;
-      }
-      snapTarget(v, edges[e].Other, position);
-      if (!keepsOrientation(v, position))
-      {
-        continue;
-      }
-      outcome = WorseQuality;
-      const double snapped = localWorst(v, position, iso);
-      if (snap ? snapped < best : snapped <= best)
-      {
-        best = snapped;
-        snap = true;
-        std::copy(position, position + Dim, chosen);
-      }
-    }
-    if (snap)
-    {
-      apply(v, chosen);
+      apply(v, position);
       return Snapped;
     }
-    const double nudged = nudgedValue(v, edges);
-    if (nudged != values[v] && localWorst(v, x, nudged) < best)
+    if (value != values[v])
     {
-      values[v] = nudged;
+      values[v] = value;
       return static_cast<std::uint8_t>(outcome | NudgedFlag);
     }
     return outcome;
+  };
+  // Every decided point's outcome (with NudgedFlag), for the flags and counts.
+  std::vector<std::uint8_t> decisions(static_cast<std::size_t>(numberOfPoints), Waiting);
+  auto record = [&](std::int64_t v, std::uint8_t decision)
+  {
+    decisions[v] = decision;
+    const Outcome outcome = static_cast<Outcome>(decision & OutcomeMask);
+    this->Moved[v] = outcome == Snapped ? 1 : 0;
+    this->Refused[v] = outcome == Snapped ? 0 : 1;
+    this->Nudged[v] = (decision & NudgedFlag) ? 1 : 0;
   };
 
   // Rounds of independent local minima.
@@ -953,29 +1010,8 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
         continue;
       }
       isCandidate[v] = 0;
+      record(v, outcomes[i]);
       const Outcome outcome = static_cast<Outcome>(outcomes[i] & OutcomeMask);
-      switch (outcome)
-      {
-        case Snapped:
-          this->Moved[v] = 1;
-          ++this->Counts.Snapped;
-          break;
-        case AllZero:
-          ++this->Counts.RefusedAllZero;
-          break;
-        case NonPositive:
-          ++this->Counts.RefusedNonPositive;
-          break;
-        default:
-          ++this->Counts.RefusedQuality;
-          break;
-      }
-      this->Refused[v] = outcome == Snapped ? 0 : 1;
-      if (outcomes[i] & NudgedFlag)
-      {
-        this->Nudged[v] = 1;
-        ++this->Counts.Nudged;
-      }
       if (outcome == Snapped || (outcomes[i] & NudgedFlag))
       {
         changedNow[v] = 1;
@@ -1023,7 +1059,226 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
       changedNow[v] = 0;
     }
     executor.ReportProgress(
-      0.5 + 0.5 * (1.0 - static_cast<double>(candidates.size()) / initialCandidates));
+      0.5 + 0.4 * (1.0 - static_cast<double>(candidates.size()) / initialCandidates));
+  }
+
+  // QualityDriven revisits: a decision was the best for the neighbours of its time, but later
+  // decisions next to it may have made its cells worse. Points whose cells have a piece worse
+  // than RevisitAbove choose again among staying, going back to their first place and value
+  // (and cut), and snapping or nudging from there, given their neighbours' present states; a
+  // change must lower their worst. Rounds of local maxima of that worst (ties: smaller id)
+  // share no cell; a point changes at most MaxRevisions times, so the pass ends.
+  if (qualityDriven && !activePoints.empty())
+  {
+    const auto activeCount = static_cast<std::int64_t>(activePoints.size());
+    auto slotOf = [&](std::int64_t p) -> std::int64_t
+    {
+      const auto found = std::lower_bound(activePoints.begin(), activePoints.end(), p);
+      return found != activePoints.end() && *found == p ? found - activePoints.begin() : -1;
+    };
+    std::vector<double> worst(activePoints.size(), 0.0);
+    std::vector<std::uint8_t> revisions(activePoints.size(), 0);
+    std::vector<std::uint8_t> listed(activePoints.size(), 0);
+    auto measureWorst = [&](const std::vector<std::int64_t>& slots)
+    {
+      detail::SnapFor(executor, static_cast<std::int64_t>(slots.size()), 256,
+        [&](std::int64_t begin, std::int64_t end)
+        {
+          for (std::int64_t i = begin; i < end; ++i)
+          {
+            const std::int64_t p = activePoints[slots[i]];
+            worst[slots[i]] = localWorst(p, points + p * Dim, values[p]);
+          }
+        });
+    };
+    std::vector<std::int64_t> slots(activePoints.size());
+    for (std::int64_t i = 0; i < activeCount; ++i)
+    {
+      slots[i] = i;
+    }
+    measureWorst(slots);
+    std::vector<std::int64_t> list;
+    for (std::int64_t i = 0; i < activeCount; ++i)
+    {
+      if (worst[i] > RevisitAbove)
+      {
+        list.push_back(i);
+        listed[i] = 1;
+      }
+    }
+    // The 1-ring of a point, as active slots, the point's own included.
+    auto forEachActiveNeighbour = [&](std::int64_t p, auto&& visit)
+    {
+      for (std::int64_t j = offsets[p]; j < offsets[p + 1]; ++j)
+      {
+        const IdType* ids = connectivity + incident[j] * (Dim + 1);
+        for (int k = 0; k <= Dim; ++k)
+        {
+          const std::int64_t slot = slotOf(static_cast<std::int64_t>(ids[k]));
+          if (slot >= 0 && !visit(slot))
+          {
+            return;
+          }
+        }
+      }
+    };
+    // v's new state, or Waiting when staying is best (v is left as it was).
+    auto revise = [&](std::int64_t slot, std::vector<Claim>& edges) -> std::uint8_t
+    {
+      const std::int64_t v = activePoints[slot];
+      const double* first = originals.data() + slot * (Dim + 1);
+      // Neighbours may have moved since v left its first place: going back must keep every
+      // cell's orientation (and the snaps below keep the first place's).
+      if (!keepsOrientation(v, first))
+      {
+        return Waiting;
+      }
+      double present[Dim] = {};
+      std::copy(points + v * Dim, points + (v + 1) * Dim, present);
+      const double presentValue = values[v];
+      const std::int8_t presentClass = classes[v];
+      const double firstValue = first[Dim];
+      // From the first state (no other selected point reads v: they share no cell).
+      std::copy(first, first + Dim, points + v * Dim);
+      values[v] = firstValue;
+      const double difference = firstValue - iso;
+      classes[v] = static_cast<std::int8_t>(difference < -tolerance ? VertexClass::Negative
+          : difference > tolerance                                  ? VertexClass::Positive
+                                                                    : VertexClass::Zero);
+      double best = worst[slot];
+      const double cut = localWorst(v, first, firstValue);
+      const bool backToCut = cut < best;
+      best = std::min(best, cut);
+      collectEdges(v, edges);
+      double position[Dim];
+      double value = firstValue;
+      const Outcome outcome = improve(v, edges, closesACell(v), false, best, position, value);
+      if (outcome == Snapped)
+      {
+        apply(v, position);
+        return Snapped;
+      }
+      if (value != firstValue)
+      {
+        values[v] = value;
+        return static_cast<std::uint8_t>(WorseQuality | NudgedFlag);
+      }
+      if (backToCut)
+      {
+        return WorseQuality;
+      }
+      std::copy(present, present + Dim, points + v * Dim);
+      values[v] = presentValue;
+      classes[v] = presentClass;
+      return Waiting;
+    };
+    std::vector<std::uint8_t> outcomes;
+    while (!list.empty())
+    {
+      if (executor.ShouldAbort())
+      {
+        return Status::Aborted();
+      }
+      ++this->Counts.RevisionRounds;
+      const auto count = static_cast<std::int64_t>(list.size());
+      std::vector<std::uint8_t> selected(list.size(), 0);
+      detail::SnapFor(executor, count, 1024,
+        [&](std::int64_t begin, std::int64_t end)
+        {
+          for (std::int64_t i = begin; i < end; ++i)
+          {
+            const std::int64_t own = list[i];
+            bool maximum = true;
+            forEachActiveNeighbour(activePoints[own],
+              [&](std::int64_t other)
+              {
+                maximum = other == own || !listed[other] || worst[other] < worst[own] ||
+                  (worst[other] == worst[own] && other > own);
+                return maximum;
+              });
+            selected[i] = maximum ? 1 : 0;
+          }
+        });
+      outcomes.assign(list.size(), Waiting);
+      detail::SnapFor(executor, count, 64,
+        [&](std::int64_t begin, std::int64_t end)
+        {
+          std::vector<Claim> edges;
+          for (std::int64_t i = begin; i < end && !executor.ShouldAbort(); ++i)
+          {
+            if (selected[i])
+            {
+              outcomes[i] = revise(list[i], edges);
+            }
+          }
+        });
+      if (executor.ShouldAbort())
+      {
+        return Status::Aborted();
+      }
+      // Unselected points stay listed; selected ones leave, and come back (with their
+      // neighbours) when they or a neighbour changed and are still bad.
+      std::vector<std::int64_t> next, touched;
+      for (std::int64_t i = 0; i < count; ++i)
+      {
+        const std::int64_t slot = list[i];
+        if (!selected[i])
+        {
+          next.push_back(slot);
+          continue;
+        }
+        listed[slot] = 0;
+        if (outcomes[i] == Waiting)
+        {
+          continue;
+        }
+        ++revisions[slot];
+        ++this->Counts.Revised;
+        record(activePoints[slot], outcomes[i]);
+        forEachActiveNeighbour(activePoints[slot],
+          [&](std::int64_t other)
+          {
+            touched.push_back(other);
+            return true;
+          });
+      }
+      std::sort(touched.begin(), touched.end());
+      touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+      measureWorst(touched);
+      for (std::int64_t slot : touched)
+      {
+        if (!listed[slot] && worst[slot] > RevisitAbove && revisions[slot] < MaxRevisions)
+        {
+          listed[slot] = 1;
+          next.push_back(slot);
+        }
+      }
+      std::sort(next.begin(), next.end());
+      list.swap(next);
+    }
+  }
+  for (std::int64_t v = 0; v < numberOfPoints; ++v)
+  {
+    if (decisions[v] == Waiting)
+    {
+      continue;
+    }
+    switch (static_cast<Outcome>(decisions[v] & OutcomeMask))
+    {
+      case Snapped:
+        ++this->Counts.Snapped;
+        break;
+      case AllZero:
+        ++this->Counts.RefusedAllZero;
+        break;
+      case NonPositive:
+        ++this->Counts.RefusedNonPositive;
+        break;
+      default:
+        ++this->Counts.RefusedQuality;
+        break;
+    }
+    this->Counts.Nudged += (decisions[v] & NudgedFlag) ? 1 : 0;
   }
   executor.ReportProgress(1.0);
   return Status::Ok();

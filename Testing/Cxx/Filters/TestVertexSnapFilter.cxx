@@ -534,26 +534,12 @@ TEST(VertexSnapFilter, AalBrainMask)
   EXPECT_NEAR(inside, voxelVolume, 0.01 * voxelVolume);
   const stmTest::VerdictQualityRange quality = stmTest::MeasureVerdictQuality(mesh);
   // The true smallest dihedral angle (Verdict's figure is not, see above).
-  double smallestDihedral = 180.0;
-  for (vtkIdType c = 0; c < mesh->GetNumberOfCells(); ++c)
-  {
-    const vtkIdType* ids = nullptr;
-    vtkIdType count = 0;
-    mesh->GetCellPoints(c, count, ids);
-    double x[4][3];
-    const double* corners[4];
-    for (int v = 0; v < 4; ++v)
-    {
-      mesh->GetPoint(ids[v], x[v]);
-      corners[v] = x[v];
-    }
-    smallestDihedral =
-      std::min(smallestDihedral, stm::MeasureSimplex<3>(corners).MinDihedralDegrees);
-  }
+  const double smallestDihedral = stmTest::MeasureTetrahedronShapes(mesh).SmallestDihedral;
   EXPECT_GT(smallestDihedral, 0.0);
-  std::cout << "AAL brain mask, labels function, Alpha 1/3: " << snap->GetNumberOfSnappedPoints()
-            << " points snapped, " << snap->GetNumberOfRefusedSnaps() << " refused, in " << seconds
-            << " s; " << mesh->GetNumberOfCells() << " tetrahedra, " << cut->GetNumberOfSplitCells()
+  std::cout << "AAL brain mask, labels function, quality-driven rule: "
+            << snap->GetNumberOfSnappedPoints() << " points snapped, "
+            << snap->GetNumberOfRefusedSnaps() << " refused, in " << seconds << " s; "
+            << mesh->GetNumberOfCells() << " tetrahedra, " << cut->GetNumberOfSplitCells()
             << " split, inside volume " << inside << " mm3 (voxels " << voxelVolume << ", "
             << 100.0 * (inside - voxelVolume) / voxelVolume << " %), worst condition "
             << quality.WorstCondition << ", smallest dihedral angle " << smallestDihedral

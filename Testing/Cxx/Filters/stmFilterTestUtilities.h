@@ -10,6 +10,7 @@
 #include "stmSpacetreeTessellate.h"
 
 #include "Check/MeshInvariants.h"
+#include "Check/SimplexQuality.h"
 
 #include <gtest/gtest.h>
 
@@ -31,6 +32,7 @@
 #include "vtkUnsignedShortArray.h"
 #include "vtkUnstructuredGrid.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -178,6 +180,44 @@ struct Pipeline
 /// Shape (1 simplex .. Dim cube, see stm::CheckCellMesh) of a VTK cell type in dimension Dim,
 /// and the order in which its VTK points give the checker's connectivity: apexes first, then
 /// the cube corners in code order. Shape 0 for a cell type that does not belong there.
+/// The worst condition number and the true smallest dihedral angle (degrees) of a tetrahedral
+/// mesh by the core's measure (vtkMeshQuality's tetrahedron minimum angle in VTK 9.2 is not the
+/// smallest dihedral angle), and its cells that are not positive (left out of the two figures).
+struct TetrahedronShapes
+{
+  double WorstCondition = 0.0;
+  double SmallestDihedral = 180.0;
+  vtkIdType NonPositive = 0;
+};
+
+inline TetrahedronShapes MeasureTetrahedronShapes(vtkUnstructuredGrid* mesh)
+{
+  TetrahedronShapes range;
+  vtkPoints* points = mesh->GetPoints();
+  for (vtkIdType cell = 0; cell < mesh->GetNumberOfCells(); ++cell)
+  {
+    vtkIdType count = 0;
+    const vtkIdType* ids = nullptr;
+    mesh->GetCellPoints(cell, count, ids);
+    double coordinates[4][3];
+    const double* corners[4];
+    for (int k = 0; k < 4; ++k)
+    {
+      points->GetPoint(ids[k], coordinates[k]);
+      corners[k] = coordinates[k];
+    }
+    const stm::SimplexShape<3> shape = stm::MeasureSimplex<3>(corners);
+    if (!(shape.Determinant > 0))
+    {
+      ++range.NonPositive;
+      continue;
+    }
+    range.WorstCondition = std::max(range.WorstCondition, shape.Condition);
+    range.SmallestDihedral = std::min(range.SmallestDihedral, shape.MinDihedralDegrees);
+  }
+  return range;
+}
+
 template <int Dim>
 int CellShape(int cellType, std::vector<int>& order)
 {
