@@ -10,6 +10,7 @@
 #include "Cut/VertexSnap.h"
 #include "Smooth/BoundarySmooth.h"
 #include "Spacetree/SpacetreeBuild.h"
+#include "Surface/InterfaceFacets.h"
 #include "Tessellate/SpacetreeTessellation.h"
 
 namespace stm
@@ -62,6 +63,10 @@ void InstantiatePipeline()
   BoundarySmoother<Dim>().Smooth(static_cast<double*>(nullptr), 0,
     static_cast<const std::int64_t*>(nullptr), 0, static_cast<const std::int64_t*>(nullptr),
     BoundarySmoothOptions(), executor);
+  InterfaceFacets<Dim> interfaces;
+  ExtractInterfaceFacets<Dim>(static_cast<const double*>(nullptr), 0,
+    static_cast<const std::int64_t*>(nullptr), 0, static_cast<const std::int64_t*>(nullptr),
+    InterfaceFacetOptions(), executor, interfaces);
 }
 } // namespace
 

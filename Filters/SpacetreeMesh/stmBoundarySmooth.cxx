@@ -58,30 +58,8 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
   const vtkIdType cells = input->GetNumberOfCells();
   vtkPoints* inputPoints = input->GetPoints();
   const stmPlaneFrame& frame = request.Coordinates;
-  std::vector<double> local(static_cast<std::size_t>(points) * Dim);
-  vtkSMPTools::For(0, points,
-    [&](vtkIdType begin, vtkIdType end)
-    {
-      for (vtkIdType p = begin; p < end; ++p)
-      {
-        double x[3];
-        inputPoints->GetPoint(p, x);
-        frame.ToCore<Dim>(x, local.data() + p * Dim);
-      }
-    });
-  std::vector<std::int64_t> materials;
-  if (vtkDataArray* material = input->GetCellData()->GetArray("Material"))
-  {
-    materials.resize(static_cast<std::size_t>(cells));
-    vtkSMPTools::For(0, cells,
-      [&](vtkIdType begin, vtkIdType end)
-      {
-        for (vtkIdType c = begin; c < end; ++c)
-        {
-          materials[c] = static_cast<std::int64_t>(material->GetComponent(c, 0));
-        }
-      });
-  }
+  std::vector<double> local = frame.CoreCoordinates<Dim>(inputPoints);
+  const std::vector<std::int64_t> materials = stmCutInput::CellMaterials(input);
 
   // The projector: Newton steps onto f = 0 of the implicit function, in the frame. VTK's
   // implicit functions may update a transform when evaluated, so evaluations are serialised.

@@ -10,7 +10,9 @@
  * BackgroundMaterial) move toward the centroid of their surface neighbours: TAUBIN (lambda|mu,
  * the default, which does not shrink) or LAPLACIAN with the damping RelaxationFactor (which
  * does). Points on the outer boundary of BackgroundMaterial cells (the box of background around
- * the body) stay fixed. After each surface iteration, NumberOfInteriorLayers rings of interior
+ * the body) stay fixed. Where three or more materials meet, a point on a junction line (3D)
+ * moves only along the line, and a point where lines meet (a quadruple point) or a 2D triple
+ * point stays. After each surface iteration, NumberOfInteriorLayers rings of interior
  * points next to the surface get one volumetric Laplacian pass. Every move is validated: it
  * must keep every incident cell's orientation and keep the worst condition number and the
  * smallest dihedral angle around the point within MaxConditionNumber / MinDihedralAngle (or no

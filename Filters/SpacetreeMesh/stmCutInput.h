@@ -11,17 +11,42 @@
 #ifndef stmCutInput_h
 #define stmCutInput_h
 
+#include "vtkCellData.h"
 #include "vtkCellType.h"
 #include "vtkDataArray.h"
 #include "vtkDataObject.h"
 #include "vtkPointData.h"
+#include "vtkSMPTools.h"
 #include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 namespace stmCutInput
 {
+/// The cell array "Material" as 64-bit integers (in parallel); empty without it.
+inline std::vector<std::int64_t> CellMaterials(vtkUnstructuredGrid* input)
+{
+  std::vector<std::int64_t> materials;
+  vtkDataArray* material = input->GetCellData()->GetArray("Material");
+  if (!material)
+  {
+    return materials;
+  }
+  materials.resize(static_cast<std::size_t>(input->GetNumberOfCells()));
+  vtkSMPTools::For(0, input->GetNumberOfCells(),
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      for (vtkIdType c = begin; c < end; ++c)
+      {
+        materials[c] = static_cast<std::int64_t>(material->GetComponent(c, 0));
+      }
+    });
+  return materials;
+}
+
 /// The dimension of a mesh of only tetrahedra (3) or only triangles (2); 0 otherwise, with the
 /// offending cell type. The mesh must have cells.
 inline int SimplexDimension(vtkUnstructuredGrid* input, int& offendingType)

@@ -17,11 +17,13 @@
 #include "vtkMath.h"
 #include "vtkNew.h"
 #include "vtkPoints.h"
+#include "vtkSMPTools.h"
 #include "vtkUnstructuredGrid.h"
 
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 class stmPlaneFrame
 {
@@ -99,6 +101,24 @@ public:
       }
     }
     return true;
+  }
+
+  /// The core coordinates of every point, Dim per point (in parallel).
+  template <int Dim>
+  std::vector<double> CoreCoordinates(vtkPoints* points) const
+  {
+    std::vector<double> core(static_cast<std::size_t>(points->GetNumberOfPoints()) * Dim);
+    vtkSMPTools::For(0, points->GetNumberOfPoints(),
+      [&](vtkIdType begin, vtkIdType end)
+      {
+        for (vtkIdType p = begin; p < end; ++p)
+        {
+          double x[3];
+          points->GetPoint(p, x);
+          this->ToCore<Dim>(x, core.data() + p * Dim);
+        }
+      });
+    return core;
   }
 
   /// Whether core coordinates are copies of point coordinates (3D, or a coordinate plane), so

@@ -60,17 +60,7 @@ stm::Status Snap(SnapRequest& request, const IdType* connectivity, std::string& 
   {
     return stm::Status::Invalid(error);
   }
-  std::vector<double> coordinates(static_cast<std::size_t>(numberOfPoints) * Dim);
-  vtkSMPTools::For(0, numberOfPoints,
-    [&](vtkIdType begin, vtkIdType end)
-    {
-      for (vtkIdType p = begin; p < end; ++p)
-      {
-        double x[3];
-        inputPoints->GetPoint(p, x);
-        frame.ToCore<Dim>(x, coordinates.data() + p * Dim);
-      }
-    });
+  std::vector<double> coordinates = frame.CoreCoordinates<Dim>(inputPoints);
 
   stmSMPExecutor executor(request.Filter);
   executor.SetProgressRange(0.1, 0.9);

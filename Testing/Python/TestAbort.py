@@ -1,4 +1,4 @@
-"""Progress reporting and aborting of the four filters on aal.nii.gz (run by pvpython).
+"""Progress reporting and aborting of the filters on aal.nii.gz (run by pvpython).
 
 - ProgressEvent fires at least 3 times per filter, from the thread that called Update(), with
   non-decreasing values in [0, 1] that end at 1.0.
@@ -40,14 +40,18 @@ smooth.SetInputConnection(cut.GetOutputPort())
 # 20 iterations take minutes on the whole atlas; 3 keep the test within its time limit and still
 # put progress 0.3 inside the iterations (the first ends at 0.39).
 smooth.SetNumberOfIterations(3)
-FILTERS = (tree, balance, mesh, cut, smooth, snap)
+interfaces = spacetreemesh.stmInterfaceSurface()
+interfaces.SetInputConnection(mesh.GetOutputPort())
+FILTERS = (tree, balance, mesh, cut, smooth, snap, interfaces)
 errors = {f.GetClassName(): T.ErrorCollector(f) for f in FILTERS}
 
 
 def signature(data):
-    """What must come back identical after an abort: counts and the Material values."""
+    """What must come back identical after an abort: counts and the Material values (the
+    BoundaryLabels of interface surfaces)."""
+    labels = "Material" if data.GetCellData().GetArray("Material") else "BoundaryLabels"
     return (data.GetNumberOfPoints(), data.GetNumberOfCells(),
-            T.cell_array(data, "Material").tobytes())
+            T.cell_array(data, labels).tobytes())
 
 
 def run(algorithm, observer=None):
@@ -108,7 +112,7 @@ for algorithm in FILTERS:
     # Threshold 0: the first event (progress 0, before RequestData). 0.3: inside the parallel work
     # of every filter (ImageToSpacetree builds in 0.2-0.9, Balance and Tessellate start at 0.1,
     # MarchingSimplices classifies in 0.05-0.45 and writes in 0.45-0.85, BoundarySmooth iterates
-    # in 0.14-0.95, 3 iterations here).
+    # in 0.14-0.95, 3 iterations here, InterfaceSurface walks the facets in 0.275-0.65).
     for threshold in (0.0, 0.3):
         what = "%s aborted at progress >= %g" % (name, threshold)
         state, observer = abort_at(threshold)

@@ -113,6 +113,41 @@ T.check_measures(mesh_data, counts, voxel_volume, 1e-6, "AAL volume per material
 # base64-encoded inside their DataArray elements. ParaView's default, Appended, puts raw bytes
 # after the XML, which some expat versions (Debian 12 security updates) refuse on reading.
 # To stay within the time budget, pvpython saves the mesh (LZ4-compressed, 4.6 M tetrahedra) and
+# --- Interface Surface on the staircase of all 116 labels: the area of every pair's facets is
+# the number of voxel faces between the two labels (the outside, -1: background and image border).
+interfaces = InterfaceSurface(Input=mesh)
+interface_data = vtk_output(interfaces)
+T.check_equal(interface_data.GetClassName(), "vtkPolyData", "Interface Surface output class")
+pair_labels = vtk_to_numpy(interface_data.GetCellData().GetArray("BoundaryLabels"))
+polys = interface_data.GetPolys()
+triangles = vtk_to_numpy(polys.GetConnectivityArray()).reshape(-1, 3)
+corners = T.points(interface_data)[triangles]
+areas = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]),
+                             axis=1)
+measured = {}
+for (first, second), area in zip(map(tuple, pair_labels.tolist()), areas):
+    measured[(first, second)] = measured.get((first, second), 0.0) + area
+volume_labels = labels.reshape(image.GetDimensions()[::-1]).astype(np.int64)
+padded = np.pad(volume_labels, 1)  # the image border counts as background
+expected = {}
+for axis in range(3):
+    low = np.moveaxis(padded, axis, 0)[:-1].ravel()
+    high = np.moveaxis(padded, axis, 0)[1:].ravel()
+    differ = low != high
+    low, high = low[differ], high[differ]
+    first = np.where((low == 0) | (high == 0), np.maximum(low, high), np.minimum(low, high))
+    second = np.where((low == 0) | (high == 0), -1, np.maximum(low, high))
+    keys, face_counts = np.unique(np.stack([first, second], axis=1), axis=0, return_counts=True)
+    for key, count in zip(map(tuple, keys.tolist()), face_counts.tolist()):
+        expected[key] = expected.get(key, 0) + count * voxel_volume ** (2.0 / 3.0)
+T.check_equal(sorted(measured), sorted(expected), "material pairs of Interface Surface")
+worst_pair = max(expected, key=lambda key: abs(measured.get(key, 0.0) - expected[key]))
+T.check(abs(measured.get(worst_pair, 0.0) - expected[worst_pair]) <= 1e-6 * expected[worst_pair],
+        "Interface Surface: pair %r measures %r, its voxel faces %r"
+        % (worst_pair, measured.get(worst_pair), expected[worst_pair]))
+Delete(interfaces)
+del interface_data, pair_labels, triangles, corners, areas
+
 # pvbatch saves the balanced spacetree, read back and tessellated again.
 
 

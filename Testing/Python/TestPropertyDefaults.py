@@ -37,6 +37,7 @@ EXPECTED_PROXIES = {
     ("filters", "stmSeparatingFunction"),
     ("filters", "stmVertexSnap"),
     ("filters", "stmBoundarySmooth"),
+    ("filters", "stmInterfaceSurface"),
     ("sources", "stmNIFTIReader"),
 }
 # Properties whose command is not a plain SetX/GetX pair, and what they are checked by instead.
@@ -78,6 +79,8 @@ PRINTED_DEFAULTS = {
                           "BackgroundMaterial: 0", "ProjectToFunction: Off",
                           "ImplicitFunction: (none)", "NumberOfMovedPoints: 0",
                           "NumberOfRejectedMoves: 0"],
+    "stmInterfaceSurface": ["IncludeOuterBoundary: On", "BackgroundMaterial: 0",
+                            "OuterLabel: -1"],
 }
 
 problems = []

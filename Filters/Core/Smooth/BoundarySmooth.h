@@ -14,6 +14,16 @@
 //   Surface neighbours of a surface point are the points joined to it by edges of surface facets
 //   (polylines in 2D, triangles in 3D); in 1D facets are points and have no edges, so surface
 //   points never move there and only interior layers are smoothed.
+// - Junctions (issue 7: several materials): each surface facet carries its material pair (the
+//   outer boundary counting as a material). Where surface facets of two or more pairs share a
+//   face of dimension Dim - 2 the surface has a junction: in 3D the edges of the lines where
+//   three or more materials meet (or an interface meets the outer boundary). A point on exactly
+//   two junction edges moves only along its line: its surface neighbours become its two line
+//   neighbours, so a straight line stays straight bit for bit. A point on one or three or more
+//   (a line's end, a quadruple point) is fixed, and so is every junction point in 2D (a triple
+//   point) and 4D (its junction surfaces are not smoothed). With one material pair, as the
+//   two-material pipeline's cut, nothing changes. Non-manifold points of one interface (two
+//   cubes of one material touching along an edge) are not junctions.
 // - Methods (uniform weights): Laplacian x += lambda (c - x), c the centroid of the surface
 //   neighbours, which shrinks a closed surface; Taubin (the default) a lambda step then a mu
 //   step per iteration with 1 / mu = PassBand - 1 / lambda (mu < -lambda), which does not.
@@ -56,6 +66,7 @@
 #include "Check/SimplexQuality.h"
 #include "Common/Determinant.h"
 #include "Common/Execution.h"
+#include "Common/PointCells.h"
 #include "Common/Status.h"
 
 #include <algorithm>
@@ -65,6 +76,7 @@
 #include <limits>
 #include <map>
 #include <string>
+#include <tuple>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -105,6 +117,10 @@ struct BoundarySmoothStats
   std::int64_t SurfacePoints = 0;
   std::int64_t FixedPoints = 0;
   std::int64_t InteriorLayerPoints = 0;
+  /// Surface points on a junction line (3D), which move only along it, and junction points
+  /// held fixed (quadruple points, line ends; in 2D and 4D every junction point).
+  std::int64_t JunctionLinePoints = 0;
+  std::int64_t JunctionCornerPoints = 0;
   int NumberOfColours = 0;
   /// Points whose final position differs from the original.
   std::int64_t MovedPoints = 0;
@@ -183,6 +199,11 @@ private:
     std::vector<Shape> Shapes;
   };
 
+  /// Junctions, after the surface neighbours are known: see the header comment.
+  template <class IdType, class MaterialType>
+  void ConstrainJunctions(const IdType* connectivity, const MaterialType* materials,
+    const std::vector<std::uint8_t>& surfaceMasks);
+
   template <class IdType>
   void CellCorners(const IdType* ids, std::int64_t cell, std::int64_t movedPoint,
     const double* movedPosition, const double* (&corners)[Dim + 1]) const;
@@ -209,8 +230,7 @@ private:
   std::vector<double> Targets;
   std::vector<double> Composed; // Taubin's targets after the mu step
   std::vector<std::uint8_t> Roles;
-  std::vector<std::int64_t> IncidentOffsets; // point -> its cells (CSR)
-  std::vector<std::int64_t> IncidentCells;
+  PointCells<Dim> Incidence;
   std::vector<std::int64_t> SurfaceOffsets; // point -> its surface neighbours (CSR)
   std::vector<std::int64_t> SurfaceNeighbours;
   std::vector<std::int8_t> Signs;
@@ -226,6 +246,179 @@ private:
 };
 
 // --- implementation ----------------------------------------------------------------------------
+
+template <int Dim>
+template <class IdType, class MaterialType>
+void BoundarySmoother<Dim>::ConstrainJunctions(const IdType* connectivity,
+  const MaterialType* materials, const std::vector<std::uint8_t>& surfaceMasks)
+{
+  if (Dim < 2 || !materials)
+  {
+    return;
+  }
+  constexpr int FaceSize = Dim < 2 ? 1 : Dim - 1; // points of a face of a surface facet
+  constexpr std::int64_t Outside = std::numeric_limits<std::int64_t>::min();
+  struct Record
+  {
+    std::int64_t Face[FaceSize];
+    std::int64_t Low, High; // the facet's material pair (Outside: the outer boundary)
+    bool operator<(const Record& other) const
+    {
+      for (int k = 0; k < FaceSize; ++k)
+      {
+        if (this->Face[k] != other.Face[k])
+        {
+          return this->Face[k] < other.Face[k];
+        }
+      }
+      return std::tie(this->Low, this->High) < std::tie(other.Low, other.High);
+    }
+    bool SameFace(const Record& other) const
+    {
+      return std::equal(this->Face, this->Face + FaceSize, other.Face);
+    }
+  };
+  // Every surface facet once (an interface from its smaller cell) with its material pair.
+  auto forEachSurfaceFacet = [&](auto&& visit)
+  {
+    for (std::int64_t c = 0; c < this->NumberOfCells; ++c)
+    {
+      const IdType* ids = connectivity + c * (Dim + 1);
+      for (int i = 0; i <= Dim; ++i)
+      {
+        if (!(surfaceMasks[c] >> i & 1))
+        {
+          continue;
+        }
+        const std::int64_t neighbour = this->Incidence.FacetNeighbour(ids, c, i);
+        if (neighbour >= 0 && neighbour < c)
+        {
+          continue;
+        }
+        const auto own = static_cast<std::int64_t>(materials[c]);
+        const std::int64_t other =
+          neighbour < 0 ? Outside : static_cast<std::int64_t>(materials[neighbour]);
+        if (!visit(ids, i, std::min(own, other), std::max(own, other)))
+        {
+          return;
+        }
+      }
+    }
+  };
+  bool oneInterface = true;
+  std::int64_t firstLow = 0, firstHigh = 0;
+  bool seen = false;
+  forEachSurfaceFacet(
+    [&](const IdType*, int, std::int64_t low, std::int64_t high)
+    {
+      oneInterface = !seen || (low == firstLow && high == firstHigh);
+      firstLow = seen ? firstLow : low;
+      firstHigh = seen ? firstHigh : high;
+      seen = true;
+      return oneInterface;
+    });
+  if (oneInterface)
+  {
+    return; // one material pair: no junction (the two-material pipeline's case)
+  }
+  // Each surface facet's faces of dimension Dim - 2, with the facet's pair.
+  std::vector<Record> records;
+  forEachSurfaceFacet(
+    [&](const IdType* ids, int i, std::int64_t low, std::int64_t high)
+    {
+      for (int drop = 0; drop <= Dim; ++drop)
+      {
+        if (drop == i)
+        {
+          continue;
+        }
+        Record record{ {}, low, high };
+        for (int j = 0, f = 0; j <= Dim; ++j)
+        {
+          if (j != i && j != drop)
+          {
+            record.Face[f++] = static_cast<std::int64_t>(ids[j]);
+          }
+        }
+        std::sort(record.Face, record.Face + FaceSize);
+        records.push_back(record);
+      }
+      return true;
+    });
+  std::sort(records.begin(), records.end());
+  // Junction faces: faces where surface facets of two or more material pairs meet. In 3D they
+  // are the edges of the junction lines; each junction point gets its neighbours along them.
+  std::vector<std::pair<std::int64_t, std::int64_t>> lineEdges;
+  for (std::size_t first = 0; first < records.size();)
+  {
+    std::size_t last = first + 1;
+    bool junction = false;
+    while (last < records.size() && records[last].SameFace(records[first]))
+    {
+      junction = junction || records[last].Low != records[first].Low ||
+        records[last].High != records[first].High;
+      ++last;
+    }
+    if (junction)
+    {
+      for (int k = 0; k < FaceSize; ++k)
+      {
+        const std::int64_t p = records[first].Face[k];
+        if constexpr (Dim == 3)
+        {
+          lineEdges.emplace_back(p, records[first].Face[1 - k]);
+        }
+        else if (this->Roles[p] == Surface)
+        {
+          this->Roles[p] = Fixed; // 2D: a junction point; 4D: not smoothed along its surface
+          ++this->Stats.JunctionCornerPoints;
+        }
+      }
+    }
+    first = last;
+  }
+  if (lineEdges.empty())
+  {
+    return;
+  }
+  // 3D: a point on exactly two junction edges moves along its line (toward the midpoint of its
+  // two line neighbours); where lines meet or end (a quadruple point) it is fixed.
+  std::sort(lineEdges.begin(), lineEdges.end());
+  lineEdges.erase(std::unique(lineEdges.begin(), lineEdges.end()), lineEdges.end());
+  std::vector<std::int64_t> offsets(this->SurfaceOffsets);
+  std::vector<std::int64_t> neighbours;
+  neighbours.reserve(this->SurfaceNeighbours.size());
+  std::size_t edge = 0;
+  for (std::int64_t p = 0; p < this->NumberOfPoints; ++p)
+  {
+    std::size_t end = edge;
+    while (end < lineEdges.size() && lineEdges[end].first == p)
+    {
+      ++end;
+    }
+    const std::size_t count = end - edge;
+    if (count == 2 && this->Roles[p] == Surface)
+    {
+      neighbours.push_back(lineEdges[edge].second);
+      neighbours.push_back(lineEdges[edge + 1].second);
+      ++this->Stats.JunctionLinePoints;
+    }
+    else
+    {
+      if (count > 0 && this->Roles[p] == Surface)
+      {
+        this->Roles[p] = Fixed;
+        ++this->Stats.JunctionCornerPoints;
+      }
+      neighbours.insert(neighbours.end(), this->SurfaceNeighbours.begin() + this->SurfaceOffsets[p],
+        this->SurfaceNeighbours.begin() + this->SurfaceOffsets[p + 1]);
+    }
+    offsets[p + 1] = static_cast<std::int64_t>(neighbours.size());
+    edge = end;
+  }
+  this->SurfaceOffsets.swap(offsets);
+  this->SurfaceNeighbours.swap(neighbours);
+}
 
 template <int Dim>
 Status BoundarySmoother<Dim>::Validate(double* points, std::int64_t numberOfPoints,
@@ -349,24 +542,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   auto sameMaterial = [&](std::int64_t a, std::int64_t b)
   { return !materials || materials[a] == materials[b]; };
 
-  // Point -> cells, in cell order.
-  this->IncidentOffsets.assign(static_cast<std::size_t>(numberOfPoints) + 1, 0);
-  for (std::int64_t i = 0; i < cells * Corners; ++i)
-  {
-    ++this->IncidentOffsets[static_cast<std::int64_t>(connectivity[i]) + 1];
-  }
-  for (std::int64_t p = 0; p < numberOfPoints; ++p)
-  {
-    this->IncidentOffsets[p + 1] += this->IncidentOffsets[p];
-  }
-  this->IncidentCells.assign(static_cast<std::size_t>(cells * Corners), 0);
-  {
-    std::vector<std::int64_t> next(this->IncidentOffsets.begin(), this->IncidentOffsets.end() - 1);
-    for (std::int64_t i = 0; i < cells * Corners; ++i)
-    {
-      this->IncidentCells[next[static_cast<std::int64_t>(connectivity[i])]++] = i / Corners;
-    }
-  }
+  this->Incidence.Build(connectivity, cells, numberOfPoints);
   if (executor.ShouldAbort())
   {
     return Status::Aborted();
@@ -477,35 +653,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
         std::uint8_t surface = 0, fixed = 0;
         for (int i = 0; i <= Dim; ++i)
         {
-          // The first other cell in the intersection of the facet's points' cell lists (sorted
-          // by cell, so a merge): a few comparisons per incident cell, where testing every
-          // cell of one point for the facet's ids cost most of the setup.
-          const std::int64_t* cursor[Dim];
-          const std::int64_t* stop[Dim];
-          for (int j = 0, f = 0; j <= Dim; ++j)
-          {
-            if (j != i)
-            {
-              const auto id = static_cast<std::int64_t>(ids[j]);
-              cursor[f] = this->Self->IncidentCells.data() + this->Self->IncidentOffsets[id];
-              stop[f++] = this->Self->IncidentCells.data() + this->Self->IncidentOffsets[id + 1];
-            }
-          }
-          std::int64_t neighbour = -1;
-          for (; cursor[0] != stop[0] && neighbour < 0; ++cursor[0])
-          {
-            const std::int64_t candidate = *cursor[0];
-            bool everywhere = candidate != c;
-            for (int f = 1; f < Dim && everywhere; ++f)
-            {
-              while (cursor[f] != stop[f] && *cursor[f] < candidate)
-              {
-                ++cursor[f];
-              }
-              everywhere = cursor[f] != stop[f] && *cursor[f] == candidate;
-            }
-            neighbour = everywhere ? candidate : -1;
-          }
+          const std::int64_t neighbour = this->Self->Incidence.FacetNeighbour(ids, c, i);
           if (neighbour < 0)
           {
             ((*this->IsBackground)(c) ? fixed : surface) |= static_cast<std::uint8_t>(1u << i);
@@ -597,6 +745,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   }
   std::vector<std::int64_t>().swap(pairs);
   std::vector<std::int64_t>().swap(counts);
+  this->ConstrainJunctions(connectivity, materials, surfaceMasks);
 
   // Interior layers by edge hops from the surface.
   std::vector<std::int64_t> frontier;
@@ -612,9 +761,9 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     std::vector<std::int64_t> next;
     for (const std::int64_t p : frontier)
     {
-      for (std::int64_t k = this->IncidentOffsets[p]; k < this->IncidentOffsets[p + 1]; ++k)
+      for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
       {
-        const IdType* ids = connectivity + this->IncidentCells[k] * Corners;
+        const IdType* ids = connectivity + this->Incidence.Cells[k] * Corners;
         for (int v = 0; v <= Dim; ++v)
         {
           const auto id = static_cast<std::int64_t>(ids[v]);
@@ -648,9 +797,9 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
           continue;
         }
         scratch.Ids.clear();
-        for (std::int64_t k = self.IncidentOffsets[p]; k < self.IncidentOffsets[p + 1]; ++k)
+        for (std::int64_t k = self.Incidence.Offsets[p]; k < self.Incidence.Offsets[p + 1]; ++k)
         {
-          const IdType* ids = this->Connectivity + self.IncidentCells[k] * Corners;
+          const IdType* ids = this->Connectivity + self.Incidence.Cells[k] * Corners;
           for (int v = 0; v <= Dim; ++v)
           {
             if (static_cast<std::int64_t>(ids[v]) != p)
@@ -702,9 +851,9 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
         continue;
       }
       used.assign(used.size(), 0);
-      for (std::int64_t k = this->IncidentOffsets[p]; k < this->IncidentOffsets[p + 1]; ++k)
+      for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
       {
-        const IdType* ids = connectivity + this->IncidentCells[k] * Corners;
+        const IdType* ids = connectivity + this->Incidence.Cells[k] * Corners;
         for (int v = 0; v <= Dim; ++v)
         {
           const std::int32_t colour = colours[static_cast<std::int64_t>(ids[v])];
@@ -873,11 +1022,11 @@ Status BoundarySmoother<Dim>::Step(const std::vector<std::vector<std::int64_t>>&
         {
           continue;
         }
-        const std::int64_t first = self.IncidentOffsets[p], last = self.IncidentOffsets[p + 1];
+        const std::int64_t first = self.Incidence.Offsets[p], last = self.Incidence.Offsets[p + 1];
         double oldWorst = 0.0, oldLargestCosine = -1.0;
         for (std::int64_t k = first; k < last; ++k)
         {
-          const Shape& old = self.Shapes[self.IncidentCells[k]];
+          const Shape& old = self.Shapes[self.Incidence.Cells[k]];
           oldWorst = std::max(oldWorst, old.Condition);
           oldLargestCosine = std::max(oldLargestCosine, old.Cosine);
         }
@@ -928,7 +1077,7 @@ Status BoundarySmoother<Dim>::Step(const std::vector<std::vector<std::int64_t>>&
           bool valid = true;
           for (std::int64_t k = first; k < last && valid; ++k)
           {
-            const std::int64_t cell = self.IncidentCells[k];
+            const std::int64_t cell = self.Incidence.Cells[k];
             const double* corners[Dim + 1];
             self.CellCorners(this->Connectivity + cell * Corners, cell, p, tentative, corners);
             // Most cells are well within the bounds, which a test without roots or divisions
@@ -954,7 +1103,7 @@ Status BoundarySmoother<Dim>::Step(const std::vector<std::vector<std::int64_t>>&
           }
           for (std::int64_t k = first; k < last; ++k)
           {
-            self.Shapes[self.IncidentCells[k]] = scratch.Shapes[k - first];
+            self.Shapes[self.Incidence.Cells[k]] = scratch.Shapes[k - first];
           }
           (attempt == 0 ? accepted : reduced) += 1;
           done = true;

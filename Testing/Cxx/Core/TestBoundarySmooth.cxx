@@ -22,6 +22,7 @@
 #include <iostream>
 #include <map>
 #include <numeric>
+#include <random>
 #include <vector>
 
 namespace
@@ -581,6 +582,147 @@ TYPED_TEST(BoundarySmoothTest, StaircaseSurfaceBecomesSmoother)
   EXPECT_GE(stats.MinDihedralAfter, stats.MinDihedralBefore);
   EXPECT_NEAR(after.VolumePerMaterial.at(1), before.VolumePerMaterial.at(1),
     0.02 * before.VolumePerMaterial.at(1));
+}
+
+/// Materials meeting along lines and at points, inside a background border of one voxel: in
+/// [1, extent - 1]^D, material 1 for x < s, 2 for x >= s and y < s, and for x, y >= s material 3
+/// (3D: 3 for z < s and 4 for z >= s), s = extent / 2. The points are jittered (seeded) except
+/// on the border, keeping every interface in its plane and every junction line on its line; the
+/// junction points of 2D and the quadruple point (s, s, s) of 3D are not jittered.
+template <int D>
+SmoothMesh<D> JitteredJunctions(std::int64_t extent, unsigned seed)
+{
+  const std::int64_t s = extent / 2;
+  LabelImage<D> image(UniformExtents<D>(extent));
+  ForEachIndex<D>(image.GetDimensions(),
+    [&](const stm::LatticeIndex<D>& voxel)
+    {
+      bool border = false;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        border = border || voxel[axis] == 0 || voxel[axis] == extent - 1;
+      }
+      stm::MaterialIndex material = voxel[0] < s ? 1 : voxel[1] < s ? 2 : 3;
+      if (D == 3 && material == 3 && voxel[D - 1] >= s)
+      {
+        material = 4;
+      }
+      image.Set(voxel, border ? 0 : material);
+    });
+  const SimplicialMesh<D> uniform = UniformMesh<D>(extent, image, true);
+  SmoothMesh<D> mesh;
+  mesh.Extent = extent;
+  mesh.Points = uniform.Coordinates();
+  mesh.Cells = uniform.Connectivity;
+  mesh.Materials = uniform.MaterialsAsInt64();
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> jitter(-0.1, 0.1);
+  const auto middle = static_cast<double>(s);
+  for (std::int64_t p = 0; p < mesh.NumberOfPoints(); ++p)
+  {
+    double* x = mesh.Points.data() + p * D;
+    double move[D];
+    bool inside = true;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      move[axis] = jitter(random);
+      inside = inside && x[axis] > 1.0 && x[axis] < static_cast<double>(extent - 1);
+    }
+    if (!inside)
+    {
+      continue;
+    }
+    const bool onX = x[0] == middle;
+    const bool onY = x[1] == middle && x[0] >= middle;
+    const bool onZ = D == 3 && x[D - 1] == middle && x[0] >= middle && x[1] >= middle;
+    move[0] = onX ? 0.0 : move[0];
+    move[1] = onY ? 0.0 : move[1];
+    move[D - 1] = onZ ? 0.0 : move[D - 1];
+    if (onX && (D == 2 ? x[1] == middle : x[1] == middle && x[D - 1] == middle))
+    {
+      continue; // the 2D junction point, the 3D quadruple point
+    }
+    for (int axis = 0; axis < D; ++axis)
+    {
+      x[axis] += move[axis];
+    }
+  }
+  return mesh;
+}
+
+// Junctions: a point where three or more materials meet moves only along its junction line
+// (3D), and where lines meet (the quadruple point) or in 2D (triple points) it stays; the
+// interfaces stay in their planes.
+TYPED_TEST(BoundarySmoothTest, JunctionLinesAndPointsAreRespected)
+{
+  constexpr int D = TypeParam::value;
+  const std::int64_t extent = D == 2 ? 16 : 8;
+  const double middle = static_cast<double>(extent / 2);
+  const SmoothMesh<D> input = JitteredJunctions<D>(extent, 5);
+  ASSERT_TRUE(Check<D>(input).IsValid()) << Check<D>(input).Summary();
+  SmoothMesh<D> mesh = input;
+  const stm::BoundarySmoothStats stats = Smooth<D>(mesh, stm::BoundarySmoothOptions());
+  const stm::MeshInvariantReport report = Check<D>(mesh);
+  EXPECT_TRUE(report.IsValid()) << report.Summary();
+  EXPECT_GT(stats.MovedPoints, 0);
+  std::int64_t junctionPoints = 0, movedAlongLines = 0;
+  for (std::int64_t p = 0; p < mesh.NumberOfPoints(); ++p)
+  {
+    const double* before = input.Points.data() + p * D;
+    const double* after = mesh.Points.data() + p * D;
+    bool inside = true;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      inside = inside && before[axis] > 1.0 && before[axis] < static_cast<double>(extent - 1);
+    }
+    if (!inside)
+    {
+      continue;
+    }
+    // The coordinates that put a point on an interface plane stay bit for bit.
+    const bool onX = before[0] == middle;
+    const bool onY = before[1] == middle && before[0] >= middle;
+    const bool onZ =
+      D == 3 && before[D - 1] == middle && before[0] >= middle && before[1] >= middle;
+    EXPECT_TRUE(!onX || after[0] == middle) << "point " << p;
+    EXPECT_TRUE(!onY || after[1] == middle) << "point " << p;
+    EXPECT_TRUE(!onZ || after[D - 1] == middle) << "point " << p;
+    const int planes = (onX ? 1 : 0) + (onY ? 1 : 0) + (onZ ? 1 : 0);
+    if (planes == D)
+    {
+      // The 2D triple point, the 3D quadruple point.
+      ++junctionPoints;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        EXPECT_EQ(after[axis], before[axis]);
+      }
+    }
+    else if (D == 3 && planes == 2)
+    {
+      bool moved = false;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        moved = moved || after[axis] != before[axis];
+      }
+      movedAlongLines += moved ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(junctionPoints, 1);
+  std::cout << D << "D junctions: " << stats.JunctionLinePoints << " points on junction lines ("
+            << movedAlongLines << " interior ones moved along them), " << stats.JunctionCornerPoints
+            << " junction points fixed, " << stats.MovedPoints << " points moved\n";
+  if (D == 3)
+  {
+    EXPECT_GT(movedAlongLines, 0);
+    EXPECT_GT(stats.JunctionLinePoints, 0);
+  }
+  else
+  {
+    EXPECT_EQ(stats.JunctionLinePoints, 0);
+  }
+  // 2D: the triple point and the three points where an interface meets the background. 3D: the
+  // quadruple point and the four ends of the junction lines on the background.
+  EXPECT_EQ(stats.JunctionCornerPoints, D == 2 ? 4 : 5);
 }
 
 TEST(BoundarySmooth, RejectsBadOptionsAndIds)
