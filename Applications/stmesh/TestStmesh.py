@@ -48,6 +48,9 @@ DEFAULT_CUT_PARAMETERS = {"separating": "labels", "output_mode": "volume", "keep
                           "iso": 0, "alpha": 1.0 / 3.0, "snap": "quality",
                           "smooth_iterations": 20, "smooth_method": "taubin"}
 STAIRCASE_CUT_PARAMETERS = dict(DEFAULT_CUT_PARAMETERS, separating="none")
+# The label merging and structure report parameters of the summary when none of their options
+# is given.
+DEFAULT_LABEL_PARAMETERS = {"merge": [], "min_component_voxels": 1}
 
 
 class CaseFailed(Exception):
@@ -203,7 +206,9 @@ def case_help_and_version(c):
                    "--output-mode volume|surface", "--keep both|inside|outside", "--iso V",
                    "--alpha A", "--snap threshold|quality|none", "--smooth-iterations N",
                    "--smooth-method taubin|laplacian",
-                   "--stop-after spacetree|balance|tessellate|snap|cut|smooth"]:
+                   "--stop-after spacetree|balance|tessellate|snap|cut|smooth",
+                   "--labels 1,2,5|all", "--merge S1,S2,...:T", "--merge 1,2,3:10 --merge 5,6:11",
+                   "--min-component-voxels N"]:
         check(option in out, "help does not mention %s" % option)
     out, _ = c.run_ok(["-h"])
     check(out.startswith("Usage: stmesh"), "-h does not print the usage")
@@ -223,7 +228,8 @@ def case_default_input_vtu(c):
     check(summary["parameters"] == dict(
         {"labels": [], "all_labels": True, "max_cell_size": 16, "balance": 1,
          "stop_after": "tessellate", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS,
-        **DEFAULT_TESSELLATE_PARAMETERS, **STAIRCASE_CUT_PARAMETERS),
+        **DEFAULT_TESSELLATE_PARAMETERS, **STAIRCASE_CUT_PARAMETERS,
+        **DEFAULT_LABEL_PARAMETERS),
         "bad parameters %s" % summary["parameters"])
     # 1 mm voxels, MaxCellSize 16: cubes of 16 down to 1 voxel.
     check(summary["voxel_subdivision"] == [1, 1, 1], "bad voxel subdivision")
@@ -390,7 +396,8 @@ def case_summary_json(c):
     check(summary["parameters"] == dict(
         {"labels": [2, 7], "all_labels": False, "max_cell_size": 4, "balance": 2,
          "stop_after": "tessellate", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS,
-        **DEFAULT_TESSELLATE_PARAMETERS, **STAIRCASE_CUT_PARAMETERS),
+        **DEFAULT_TESSELLATE_PARAMETERS, **STAIRCASE_CUT_PARAMETERS,
+        **DEFAULT_LABEL_PARAMETERS),
         "bad parameters %s" % summary["parameters"])
     check(summary["spacetree_axes"] == [0, 1, 2], "bad spacetree axes")
     check(summary["voxel_subdivision"] == [1, 1, 1], "bad voxel subdivision")
@@ -1197,7 +1204,7 @@ def case_option_elements_hybrid_uniform(c):
             {"labels": [], "all_labels": True, "max_cell_size": 1, "balance": 1,
              "stop_after": "tessellate", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS,
             **dict(DEFAULT_TESSELLATE_PARAMETERS, elements="hybrid"),
-            **STAIRCASE_CUT_PARAMETERS),
+            **STAIRCASE_CUT_PARAMETERS, **DEFAULT_LABEL_PARAMETERS),
             "bad parameters %s" % summary["parameters"])
         check(tessellate["cells_by_type"] == {"hexahedron": 252},
               "%s: cells %s, expected 252 hexahedra" % (name, tessellate["cells_by_type"]))
@@ -1650,7 +1657,7 @@ def case_cut_default(c):
     check(summary["parameters"] == dict(
         {"labels": [], "all_labels": True, "max_cell_size": 16, "balance": 1,
          "stop_after": "smooth", "compressor": "lz4"}, **DEFAULT_SPACETREE_PARAMETERS,
-        **DEFAULT_TESSELLATE_PARAMETERS, **DEFAULT_CUT_PARAMETERS),
+        **DEFAULT_TESSELLATE_PARAMETERS, **DEFAULT_CUT_PARAMETERS, **DEFAULT_LABEL_PARAMETERS),
         "bad parameters %s" % summary["parameters"])
     check(mesh["types"] == {TETRA}, "cell types %s, expected tetrahedra" % mesh["types"])
     # Every label of the body is inside: Material 1; the tessellation's labels are kept.
@@ -2308,6 +2315,305 @@ def case_error_cut_files(c):
     check(not errors, "cannot write colour.vti")
     c.run_failing([image, "-o", output, "--separating", "gray:%s:3" % c.path("colour.vti")], 1,
                   "3 components per voxel; stmesh needs one gray value per voxel", output=output)
+
+
+# ------------------------------------------------------------------------------------------------
+# --labels all, --merge and the structure report ("materials" in the summary, the "materials:"
+# line).
+
+def merge_labels(i, j, k):
+    """Labels 1, 2, 3 and 5 in boxes of 12 x 10 x 8: 1 and 2 touch, 3 and 5 stand apart."""
+    if 1 <= j <= 4 and 1 <= k <= 3:
+        if 1 <= i <= 3:
+            return 1
+        if 4 <= i <= 6:
+            return 2
+    if 6 <= j <= 8 and 4 <= k <= 6:
+        if 1 <= i <= 4:
+            return 3
+        if 7 <= i <= 10:
+            return 5
+    return 0
+
+
+def report_labels(i, j, k):
+    """two_boxes and one more voxel of label 2 at (9, 7, 3), which touches the box of label 2
+    only along an edge: a second component of 2 under 6-connectivity."""
+    return 2 if (i, j, k) == (9, 7, 3) else two_boxes(i, j, k)
+
+
+def flat_labels(i, j, k):
+    """A 2D image (16 x 15 x 1): label 1 in a 4 x 4 square and at the two voxels (8, 8) and
+    (9, 9), which touch each other and nothing else only at a corner; label 4 in a 3 x 2
+    rectangle."""
+    if 2 <= i <= 5 and 2 <= j <= 5 or (i, j) in ((8, 8), (9, 9)):
+        return 1
+    if 10 <= i <= 12 and 2 <= j <= 3:
+        return 4
+    return 0
+
+
+def report_line(materials):
+    """The printed line the summary's materials give: the body materials (not 0) only."""
+    body = [entry for entry in materials if entry["material"] != 0]
+    lost = sum(entry["lost_components"] for entry in body)
+    components = sum(entry["image_components"] for entry in body)
+    line = "materials: %d material%s, %d lost component%s (of %d), largest volume error " % (
+        len(body), "" if len(body) == 1 else "s", lost, "" if lost == 1 else "s", components)
+    errors = [entry for entry in body if entry["volume_error"] is not None]
+    if not errors:
+        return line + "n/a"
+    worst = max(errors, key=lambda entry: abs(entry["volume_error"]))
+    percent = 100.0 * worst["volume_error"]
+    if abs(percent) < 0.005:
+        percent = 0.0
+    return line + "%.2f%% (material %d)" % (percent, worst["material"])
+
+
+def check_report(summary, out, voxels, what, components=None, mesh_volumes=None):
+    """The staircase report: one entry per material, ascending, with the image's voxels, the
+    mesh volume equal to the voxel volume (1 mm voxels) unless mesh_volumes gives it, no lost
+    component and, if given, the components per material; the printed line agrees."""
+    materials = summary["materials"]
+    check(isinstance(materials, list), "%s: materials is %r" % (what, materials))
+    check([entry["material"] for entry in materials] == sorted(int(m) for m in voxels),
+          "%s: materials %s, expected %s" % (what, [e["material"] for e in materials],
+                                             sorted(int(m) for m in voxels)))
+    for entry in materials:
+        count = voxels[str(entry["material"])]
+        check(entry["voxels"] == count and entry["voxel_volume"] == count,
+              "%s: material %d has %s voxels, volume %s; expected %d" %
+              (what, entry["material"], entry["voxels"], entry["voxel_volume"], count))
+        volume = (mesh_volumes or {}).get(str(entry["material"]), count)
+        check(close(entry["mesh_volume"], volume),
+              "%s: material %d: mesh volume %r, expected %d" %
+              (what, entry["material"], entry["mesh_volume"], volume))
+        check(abs(entry["volume_error"] - (volume - count) / count) <= 1e-9,
+              "%s: volume_error %r" % (what, entry["volume_error"]))
+        check(entry["lost_components"] == 0,
+              "%s: material %d lost %d components" % (what, entry["material"],
+                                                      entry["lost_components"]))
+        if components is not None:
+            check(entry["image_components"] == components[str(entry["material"])],
+                  "%s: material %d has %d components, expected %d" %
+                  (what, entry["material"], entry["image_components"],
+                   components[str(entry["material"])]))
+    check(isinstance(summary["report_seconds"], float) and summary["report_seconds"] >= 0,
+          "%s: bad report_seconds %r" % (what, summary.get("report_seconds")))
+    check(report_line(materials) in out.splitlines(),
+          "%s: stdout lacks the line %r" % (what, report_line(materials)))
+
+
+def case_option_labels_all(c):
+    # --labels all is the default spelled out: the same parameters and the same mesh.
+    image, _ = write_label_image(c, "boxes.vti", (12, 10, 8), two_boxes)
+    results = {}
+    for name, arguments in [("default", []), ("all", ["--labels", "all"]),
+                            ("all_inline", ["--labels=all"])]:
+        summary, tessellate, mesh, _ = tessellate_run(c, image, name, arguments)
+        results[name] = (summary["parameters"], tessellate["cells"], mesh["cells"])
+    check(results["default"][0]["labels"] == [] and results["default"][0]["all_labels"] is True,
+          "bad default labels %s" % results["default"][0])
+    check(results["all"] == results["default"] == results["all_inline"],
+          "--labels all differs from the default: %s" % results)
+    # The same in the default pipeline, with its cut.
+    ball_image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    default, _, _, default_mesh, _, _ = cut_run(c, ball_image, "cut_default", [])
+    explicit, _, _, explicit_mesh, _, _ = cut_run(c, ball_image, "cut_all", ["--labels", "all"])
+    check(explicit["parameters"] == default["parameters"], "--labels all: parameters %s" %
+          explicit["parameters"])
+    check(explicit_mesh["cells"] == default_mesh["cells"], "--labels all: %d cells, default %d" %
+          (explicit_mesh["cells"], default_mesh["cells"]))
+    # "all" is a whole value, not a list entry.
+    c.run_failing([image, "-o", c.path("x.vtu"), "--labels", "all,2"], 2, "--labels",
+                  output=c.path("x.vtu"))
+
+
+def case_option_merge(c):
+    image, voxels = write_label_image(c, "labels.vti", (12, 10, 8), merge_labels)
+    check(voxels == {"1": 36, "2": 36, "3": 36, "5": 36}, "bad test image: %s" % voxels)
+    for name, arguments, expected, merge in [
+            ("new_target", ["--merge", "1,2:10"], {"10": 72, "3": 36, "5": 36},
+             [{"sources": [1, 2], "target": 10}]),
+            ("source_target", ["--merge", "2,3:3"], {"1": 36, "3": 72, "5": 36},
+             [{"sources": [2, 3], "target": 3}]),
+            ("two_groups", ["--merge", "1,2:10", "--merge=5,3:11"], {"10": 72, "11": 72},
+             [{"sources": [1, 2], "target": 10}, {"sources": [5, 3], "target": 11}]),
+            # A target beyond the uint8 labels widens the merged copy.
+            ("wide_target", ["--merge", "1,2,3,5:300"], {"300": 144},
+             [{"sources": [1, 2, 3, 5], "target": 300}]),
+            # --labels names the merged labels.
+            ("merged_body", ["--merge", "1,2:10", "--labels", "10"], {"10": 72},
+             [{"sources": [1, 2], "target": 10}])]:
+        summary, _, mesh, _ = tessellate_run(c, image, name, arguments)
+        check(summary["parameters"]["merge"] == merge,
+              "%s: parameters.merge %s" % (name, summary["parameters"]["merge"]))
+        check(summary["parameters"]["labels"] == ([10] if name == "merged_body" else []),
+              "%s: labels %s" % (name, summary["parameters"]["labels"]))
+        check(summary["image"]["scalar_type"] == "unsigned char",
+              "%s: scalar type %s" % (name, summary["image"]["scalar_type"]))
+        # The staircase mesh: every merged material measures exactly its sources' voxels.
+        check_volume_equals_voxels(mesh, expected, name)
+        check(sorted(summary["tetrahedra_per_material"]) == sorted(expected),
+              "%s: materials %s" % (name, sorted(summary["tetrahedra_per_material"])))
+        check([entry["material"] for entry in summary["materials"]] ==
+              sorted(int(m) for m in expected), "%s: report materials %s" %
+              (name, [entry["material"] for entry in summary["materials"]]))
+        for entry in summary["materials"]:
+            check(entry["voxels"] == expected[str(entry["material"])] and
+                  close(entry["mesh_volume"], entry["voxel_volume"]),
+                  "%s: report %s" % (name, entry))
+    # A merged-away label is no longer in the image.
+    output = c.path("gone.vtu")
+    c.run_failing([image, "-o", output, "--merge", "1,2:10", "--labels", "1"] + STAIRCASE, 1,
+                  "Body label 1 does not occur", output=output)
+
+
+def case_error_merge_values(c):
+    image, _ = write_label_image(c, "labels.vti", (12, 10, 8), merge_labels)
+    output = c.path("out.vtu")
+    for arguments, text in [
+            (["--merge", "0,1:5"], "--merge: 0 is the background label and cannot be merged"),
+            (["--merge", "1,2:0"], "--merge: the target of '1,2:0' is 0, the background label"),
+            (["--merge", "1,2,1:7"], "--merge: label 1 is listed twice in '1,2,1:7'"),
+            (["--merge", "1,2:7", "--merge", "3,2:8"],
+             "--merge: label 2 is a source of both '1,2:7' and '3,2:8'"),
+            (["--merge", "1:2", "--merge", "2,3:4"],
+             "--merge: label 2 is the target of '1:2' and a source of '2,3:4'"),
+            (["--merge", "1,2"], "--merge: '1,2' is not SOURCES:TARGET"),
+            (["--merge", "1,,2:3"], "--merge: empty entry in '1,,2'"),
+            (["--merge", "a:3"], "--merge source: 'a' is not an integer"),
+            (["--merge", "1:99999999999"], "--merge target: 99999999999 is out of range"),
+            (["--min-component-voxels", "0"], "--min-component-voxels: 0 is out of range"),
+            (["--min-component-voxels", "x"], "--min-component-voxels: 'x' is not an integer"),
+            (["--min-component-voxels", "2", "--min-component-voxels", "3"],
+             "--min-component-voxels given more than once")]:
+        err = c.run_failing([image, "-o", output] + arguments, 2, text, output=output)
+        check("--help" in err, "usage errors should point to --help")
+    # A source the image does not hold fails like an absent --labels label (exit code 1).
+    for arguments, text in [
+            (["--merge", "1,9:10"], "--merge: source label 9 does not occur in the image"),
+            (["--merge", "1,2:10", "--merge", "4,6:11"],
+             "--merge: source labels 4, 6 do not occur in the image")]:
+        err = c.run_failing([image, "-o", output] + arguments + STAIRCASE, 1, text, output=output)
+        check("--help" not in err, "an absent label is no usage error")
+
+
+def case_report_staircase(c):
+    image, voxels = write_label_image(c, "labels.vti", (12, 10, 8), report_labels)
+    check(voxels == {"1": 144, "2": 109}, "bad test image: %s" % voxels)
+    output, summary_path = c.path("mesh.vtu"), c.path("mesh.json")
+    out, _ = c.run_ok([image, "-o", output, "--summary", summary_path] + STAIRCASE)
+    summary = load_summary(summary_path)
+    check_report(summary, out, voxels, "staircase", {"1": 1, "2": 2})
+    check(summary["parameters"]["min_component_voxels"] == 1, "bad min_component_voxels")
+    # The one-voxel component is left out with --min-component-voxels 2; all else stays.
+    output, summary_path = c.path("min2.vtu"), c.path("min2.json")
+    out, _ = c.run_ok([image, "-o", output, "--summary", summary_path,
+                       "--min-component-voxels", "2"] + STAIRCASE)
+    summary = load_summary(summary_path)
+    check(summary["parameters"]["min_component_voxels"] == 2, "bad min_component_voxels")
+    check_report(summary, out, voxels, "--min-component-voxels 2", {"1": 1, "2": 1})
+    # Larger than every component: none is counted.
+    output, summary_path = c.path("min200.vtu"), c.path("min200.json")
+    out, _ = c.run_ok([image, "-o", output, "--summary", summary_path,
+                       "--min-component-voxels", "200"] + STAIRCASE)
+    check_report(load_summary(summary_path), out, voxels, "--min-component-voxels 200",
+                 {"1": 0, "2": 0})
+    # Other staircase outputs: hexahedra (leaves, hybrid, with --labels restricting the body:
+    # label 1 becomes background), the spacetree and the balanced tree, whose background
+    # leaves fill the root grid: 3 x 3 x 2 roots of 4 voxels, 12 x 12 x 8 voxels, the image
+    # padded by 2 rows of background.
+    background = 12 * 10 * 8 - 144 - 109
+    padded = 12 * 12 * 8 - 144 - 109
+    for name, arguments, expected, components in [
+            ("leaves", ["--elements", "leaves"], voxels, {"1": 1, "2": 2}),
+            ("hybrid", ["--elements", "hybrid", "--labels", "2"], {"2": 109}, {"2": 2}),
+            ("spacetree", ["--stop-after", "spacetree", "--max-cell-size", "4",
+                           "--pattern", "2x2x2"], dict(voxels, **{"0": background}),
+             {"0": 1, "1": 1, "2": 2}),
+            ("balance", ["--stop-after", "balance", "--max-cell-size", "4",
+                         "--pattern", "2x2x2"], dict(voxels, **{"0": background}),
+             {"0": 1, "1": 1, "2": 2})]:
+        output, summary_path = c.path(name + ".vtu"), c.path(name + ".json")
+        out, _ = c.run_ok([image, "-o", output, "--summary", summary_path] + arguments +
+                          STAIRCASE)
+        check_report(load_summary(summary_path), out, expected, name, components,
+                     {"0": padded})
+    # With boundary layers the background is in the mesh but covers only the layers: listed,
+    # and left out of the printed line.
+    output, summary_path = c.path("layers.vtu"), c.path("layers.json")
+    out, _ = c.run_ok([image, "-o", output, "--summary", summary_path, "--boundary-layer", "1"]
+                      + STAIRCASE)
+    summary = load_summary(summary_path)
+    check([entry["material"] for entry in summary["materials"]] == [0, 1, 2],
+          "boundary layers: materials %s" % [e["material"] for e in summary["materials"]])
+    zero = summary["materials"][0]
+    check(zero["voxels"] == background and 0 < zero["mesh_volume"] < background,
+          "boundary layers: background entry %s" % zero)
+    check(report_line(summary["materials"]) in out.splitlines(),
+          "boundary layers: stdout lacks %r" % report_line(summary["materials"]))
+    # A 2D image: 4-connected components; the two diagonal voxels are two components.
+    flat, flat_voxels = write_label_image(c, "flat.vti", (16, 15, 1), flat_labels)
+    check(flat_voxels == {"1": 18, "4": 6}, "bad 2D test image: %s" % flat_voxels)
+    output, summary_path = c.path("flat.vtu"), c.path("flat.json")
+    out, _ = c.run_ok([flat, "-o", output, "--summary", summary_path] + STAIRCASE)
+    check_report(load_summary(summary_path), out, flat_voxels, "2D", {"1": 3, "4": 1})
+
+
+def case_report_cut(c):
+    image, voxels = write_label_image(c, "ball.vti", (25, 25, 25), big_ball)
+    body = voxels["1"]
+    background = 25 ** 3 - body
+    summary, _, _, mesh, out, _ = cut_run(c, image, "default", [])
+    materials = summary["materials"]
+    check([entry["material"] for entry in materials] == [0, 1],
+          "materials %s" % [entry["material"] for entry in materials])
+    zero, one = materials
+    check(one["voxels"] == body and one["voxel_volume"] == body, "material 1: %s" % one)
+    check(abs(one["volume_error"]) <= 0.05, "material 1: volume error %r" % one["volume_error"])
+    check(close(one["volume_error"], (one["mesh_volume"] - body) / body),
+          "material 1: volume_error %r does not fit its volumes" % one["volume_error"])
+    check(close(one["mesh_volume"], material_volumes(mesh)[1]),
+          "material 1: mesh_volume %r, the file's cells %r" % (one["mesh_volume"],
+                                                              material_volumes(mesh)[1]))
+    check(one["image_components"] == 1 and one["lost_components"] == 0, "material 1: %s" % one)
+    check(zero["voxels"] == background and close(zero["mesh_volume"], material_volumes(mesh)[0]),
+          "material 0: %s" % zero)
+    check(report_line(materials) in out.splitlines(), "stdout lacks %r" % report_line(materials))
+    check(report_line(materials).startswith("materials: 1 material, 0 lost components (of 1), "
+                                             "largest volume error "), report_line(materials))
+    # --keep inside: the mesh has no background, so only the body is listed.
+    summary, _, _, _, out, _ = cut_run(c, image, "inside", ["--keep", "inside"])
+    check([entry["material"] for entry in summary["materials"]] == [1],
+          "--keep inside: materials %s" % [e["material"] for e in summary["materials"]])
+    check(summary["materials"][0]["lost_components"] == 0, "--keep inside lost the body")
+    # --keep outside: the body is in the image but not in the mesh: listed, with volume 0 and
+    # its component lost.
+    summary, _, _, _, out, _ = cut_run(c, image, "outside", ["--keep", "outside"])
+    check([entry["material"] for entry in summary["materials"]] == [0, 1],
+          "--keep outside: materials %s" % [e["material"] for e in summary["materials"]])
+    one = summary["materials"][1]
+    check(one["voxels"] == body and one["mesh_volume"] == 0 and one["volume_error"] == -1 and
+          one["image_components"] == 1 and one["lost_components"] == 1,
+          "--keep outside: material 1: %s" % one)
+    check("materials: 1 material, 1 lost component (of 1), largest volume error -100.00% "
+          "(material 1)" in out.splitlines(), "--keep outside: bad materials line")
+    # One label as the body: it is the inside material, and the other labels map to 0.
+    two, two_voxels = write_label_image(c, "two.vti", (16, 15, 14), ball)
+    summary, _, _, _, _, _ = cut_run(c, two, "label3", ["--labels", "3"], inside=3)
+    entries = {entry["material"]: entry for entry in summary["materials"]}
+    check(sorted(entries) == [0, 3], "--labels 3: materials %s" % sorted(entries))
+    check(entries[3]["voxels"] == two_voxels["3"] and
+          entries[0]["voxels"] == 16 * 15 * 14 - two_voxels["3"],
+          "--labels 3: voxels %s" % entries)
+    # A surface has no volume to report.
+    output, summary_path = c.path("surface.vtp"), c.path("surface.json")
+    out, _ = c.run_ok([image, "-o", output, "--summary", summary_path, "--output-mode",
+                       "surface"])
+    check(load_summary(summary_path)["materials"] is None, "surface output has a report")
+    check(not any(line.startswith("materials:") for line in out.splitlines()),
+          "surface output prints a materials line")
 
 
 def main():
