@@ -16,6 +16,7 @@ also read surfaces back; the cases that check the staircase tessellation pass --
 import argparse
 import gzip
 import json
+import math
 import os
 import random
 import shutil
@@ -50,7 +51,7 @@ DEFAULT_CUT_PARAMETERS = {"separating": "labels", "output_mode": "volume", "keep
 STAIRCASE_CUT_PARAMETERS = dict(DEFAULT_CUT_PARAMETERS, separating="none")
 # The label merging and structure report parameters of the summary when none of their options
 # is given.
-DEFAULT_LABEL_PARAMETERS = {"merge": [], "min_component_voxels": 1}
+DEFAULT_LABEL_PARAMETERS = {"merge": [], "min_component_voxels": 1, "interfaces": None}
 
 
 class CaseFailed(Exception):
@@ -208,7 +209,7 @@ def case_help_and_version(c):
                    "--smooth-method taubin|laplacian",
                    "--stop-after spacetree|balance|tessellate|snap|cut|smooth",
                    "--labels 1,2,5|all", "--merge S1,S2,...:T", "--merge 1,2,3:10 --merge 5,6:11",
-                   "--min-component-voxels N"]:
+                   "--min-component-voxels N", "--interfaces FILE"]:
         check(option in out, "help does not mention %s" % option)
     out, _ = c.run_ok(["-h"])
     check(out.startswith("Usage: stmesh"), "-h does not print the usage")
@@ -1520,11 +1521,15 @@ def read_surface(path):
         cells.append([ids.GetId(i) for i in range(ids.GetNumberOfIds())])
     cell_data = surface.GetCellData()
     original = cell_data.GetArray("OriginalMaterial")
+    pairs = cell_data.GetArray("BoundaryLabels")
     return {"points": [surface.GetPoint(point) for point in range(surface.GetNumberOfPoints())],
             "cells": cells,
             "types": set(surface.GetCellType(cell) for cell in range(surface.GetNumberOfCells())),
             "original": None if original is None else
             [int(original.GetTuple1(cell)) for cell in range(surface.GetNumberOfCells())],
+            "boundary_labels": None if pairs is None else
+            [tuple(int(value) for value in pairs.GetTuple2(cell))
+             for cell in range(surface.GetNumberOfCells())],
             "cell_arrays": sorted(cell_data.GetArrayName(i)
                                   for i in range(cell_data.GetNumberOfArrays()))}
 
@@ -2402,6 +2407,76 @@ def check_report(summary, out, voxels, what, components=None, mesh_volumes=None)
           "%s: bad report_seconds %r" % (what, summary.get("report_seconds")))
     check(report_line(materials) in out.splitlines(),
           "%s: stdout lacks the line %r" % (what, report_line(materials)))
+
+
+def pair_areas(surface):
+    """The total area of the triangles of an interface surface per BoundaryLabels pair."""
+    areas = {}
+    for cell, pair in zip(surface["cells"], surface["boundary_labels"]):
+        a, b, c = (surface["points"][i] for i in cell)
+        u = [b[k] - a[k] for k in range(3)]
+        v = [c[k] - a[k] for k in range(3)]
+        n = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+        areas[pair] = areas.get(pair, 0.0) + 0.5 * math.sqrt(sum(x * x for x in n))
+    return areas
+
+
+def case_option_interfaces(c):
+    image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    # The staircase of the labels: per pair, the facets measure the voxel faces between them
+    # (1 mm voxels); the outside of the mesh (the background, no cells here) is -1.
+    faces = c.path("faces.vtp")
+    summary_path = c.path("faces.json")
+    out, _ = c.run_ok([image, "-o", c.path("stair.vtu"), "--separating", "none",
+                       "--interfaces", faces, "--summary", summary_path])
+    summary = load_summary(summary_path)
+    check([entry["name"] for entry in summary["stages"]] == STAGES_TESSELLATE + ["interfaces"],
+          "stages %s" % [entry["name"] for entry in summary["stages"]])
+    check(summary["parameters"]["interfaces"] == faces, "bad interfaces parameter")
+    surface = read_surface(faces)
+    interfaces = stage(summary, "interfaces")
+    check(interfaces["cells"] == len(surface["cells"]) and
+          interfaces["file_bytes"] == os.path.getsize(faces), "interfaces stage %s" % interfaces)
+    check(("%d facets" % len(surface["cells"])) in out, "the table does not show the facets")
+    check("BoundaryLabels" in surface["cell_arrays"] and "CellId" in surface["cell_arrays"],
+          "cell arrays %s" % surface["cell_arrays"])
+    expected = {}
+    for k in range(14):
+        for j in range(15):
+            for i in range(16):
+                own = ball(i, j, k)
+                for di, dj, dk in ((1, 0, 0), (0, 1, 0), (0, 0, 1)):
+                    ni, nj, nk = i + di, j + dj, k + dk
+                    other = ball(ni, nj, nk) if ni < 16 and nj < 15 and nk < 14 else 0
+                    if own == other:
+                        continue
+                    key = ((max(own, other), -1) if 0 in (own, other)
+                           else (min(own, other), max(own, other)))
+                    expected[key] = expected.get(key, 0) + 1
+    measured = pair_areas(surface)
+    check(sorted(measured) == sorted(expected), "pairs %s, voxel faces %s"
+          % (sorted(measured), sorted(expected)))
+    for key, count in expected.items():
+        check(close(measured[key], count), "pair %s measures %r, %d voxel faces"
+              % (key, measured[key], count))
+    # The default pipeline (cut and smoothed): the interface between outside (0) and inside (1)
+    # only, the background box being left out; legacy .vtk works too.
+    legacy = c.path("cut_faces.vtk")
+    c.run_ok([image, "-o", c.path("cut.vtu"), "--interfaces", legacy])
+    cut_surface = read_surface(legacy)
+    check(set(cut_surface["boundary_labels"]) == {(0, 1)},
+          "pairs of the cut %s" % sorted(set(cut_surface["boundary_labels"])))
+    # What cannot have interfaces.
+    for arguments, text in [
+            (["--interfaces", c.path("i.vtu")], "use .vtp"),
+            (["--interfaces", c.path("i.vtp"), "--output-mode", "surface", "-o",
+              c.path("s.vtp")], "--output-mode surface"),
+            (["--interfaces", c.path("i.vtp"), "--stop-after", "balance"], "--stop-after balance"),
+            (["--interfaces", c.path("i.vtp"), "--separating", "none", "--elements", "hybrid"],
+             "--elements hybrid"),
+            (["--interfaces="], "--interfaces needs a file name")]:
+        arguments = [image] + (["-o", c.path("x.vtu")] if "-o" not in arguments else []) + arguments
+        c.run_failing(arguments, 2, text)
 
 
 def case_option_labels_all(c):

@@ -24,6 +24,7 @@
 #include "Check/SimplexQuality.h"
 #include "stmBoundarySmooth.h"
 #include "stmImageToSpacetree.h"
+#include "stmInterfaceSurface.h"
 #include "stmMarchingSimplices.h"
 #include "stmSeparatingFunction.h"
 #include "stmSpacetreeBalance.h"
@@ -148,7 +149,7 @@ const char* const UsageText =
               [--alpha A] [--snap threshold|quality|none]
               [--smooth-iterations N] [--smooth-method taubin|laplacian]
               [--stop-after spacetree|balance|tessellate|snap|cut|smooth] [--threads N]
-              [--summary FILE.json] [--compressor lz4|zlib|none]
+              [--summary FILE.json] [--compressor lz4|zlib|none] [--interfaces FILE.vtp]
        stmesh -h|--help
        stmesh --version
 
@@ -295,6 +296,16 @@ Arguments:
   --compressor C        compression of .vtu and .vtp files: lz4 (the default, fastest), zlib
                         (files about 2.3 times smaller, written about 1 s slower per 5 million
                         tetrahedra) or none.
+  --interfaces FILE     also write the interfaces of the output mesh to FILE (.vtp, VTK XML
+                        polydata, or .vtk, legacy): every facet between two materials and every
+                        outer-boundary facet of a non-background cell, once each (triangles; lines
+                        in 2D), with the cell array BoundaryLabels (the material the facet's
+                        normal points out of, the smaller one at an interface; then the other
+                        side, -1 outside the mesh) and CellId (the mesh cell). Threshold it on
+                        BoundaryLabels for one region's closed surface or one interface. Needs a
+                        volume mesh of tetrahedra (triangles): not with --output-mode surface,
+                        --stop-after spacetree|balance or --elements hybrid|leaves. Its stage
+                        "interfaces" (extraction and writing) follows "write".
   --min-component-voxels N
                         the structure report (the "materials:" line and "materials" in the
                         summary) counts only the connected components (6-connected voxels; 4
@@ -620,6 +631,7 @@ struct Options
   int Threads = 0;                                          // 0: not given on the command line
   std::string SummaryPath;
   std::string Compressor = "lz4"; // of .vtu files: lz4, zlib or none
+  std::string Interfaces;         // --interfaces: the interface surface's file, or empty
   std::string Pattern = "auto";   // normalised: lower case, no blanks
   int PatternCounts = 0;          // split counts per entry (2 or 3); 0 for auto
   std::vector<int> RootCellSize;  // empty: automatic; else 2 or 3 sizes in voxels
@@ -1211,7 +1223,8 @@ Options ParseCommandLine(int argc, char* argv[])
       "--root-cell-size", "--max-cell-size-label", "--refine-region", "--grading", "--sizing-array",
       "--balance-label", "--balance-region", "--elements", "--templates", "--cell-template",
       "--boundary-layer", "--separating", "--output-mode", "--keep", "--iso", "--alpha", "--snap",
-      "--smooth-iterations", "--smooth-method", "--merge", "--min-component-voxels" };
+      "--smooth-iterations", "--smooth-method", "--merge", "--min-component-voxels",
+      "--interfaces" };
     if (valueOptions.count(name) == 0)
     {
       throw UsageError("unknown option '" + name + "'");
@@ -1368,6 +1381,14 @@ Options ParseCommandLine(int argc, char* argv[])
     {
       options.Threads = static_cast<int>(ParseInteger(value, name, 1, MaxThreads));
     }
+    else if (name == "--interfaces")
+    {
+      if (value.empty())
+      {
+        throw UsageError("--interfaces needs a file name");
+      }
+      options.Interfaces = value;
+    }
     else if (name == "--summary")
     {
       if (value.empty())
@@ -1486,6 +1507,35 @@ Options ParseCommandLine(int argc, char* argv[])
     }
     throw UsageError(
       "output '" + options.Output + "': .vtp holds polydata, but " + reason + "; " + extensions);
+  }
+  if (!options.Interfaces.empty())
+  {
+    MeshFormat interfaceFormat;
+    if (!FindMeshFormat(options.Interfaces, interfaceFormat) ||
+      interfaceFormat == MeshFormat::XMLUnstructuredGrid)
+    {
+      throw UsageError("--interfaces '" + options.Interfaces +
+        "': the interfaces are polydata; use .vtp (VTK XML polydata) or .vtk (legacy VTK)");
+    }
+    if (options.WritesSurface())
+    {
+      throw UsageError("--interfaces needs a volume mesh, but --output-mode surface writes the "
+                       "cut's surface only; give --output-mode volume (the default)");
+    }
+    if (options.StopAfter < StopStage::Tessellate)
+    {
+      throw UsageError(std::string("--interfaces needs tetrahedra (triangles), but --stop-after ") +
+        StopStageName(options.StopAfter) +
+        " writes the spacetree's leaves; give --stop-after "
+        "tessellate or a later stage");
+    }
+    if (options.Elements != stmSpacetreeTessellate::SIMPLICIAL)
+    {
+      throw UsageError(std::string("--interfaces needs tetrahedra (triangles), but --elements ") +
+        KeywordName(options.Elements, ElementKinds) +
+        " writes other cells; give --elements "
+        "simplicial (the default)");
+    }
   }
   return options;
 }
@@ -2589,6 +2639,34 @@ int WriteLegacy(vtkDataObject* mesh, const std::string& path, unsigned long& err
   return written;
 }
 
+void WriteMesh(vtkPointSet* mesh, const std::string& path, MeshFormat format,
+  const std::string& compressor, StageReport& report);
+
+/// The "interfaces" stage: stmInterfaceSurface on the output mesh, written to --interfaces.
+StageReport WriteInterfaces(vtkPointSet* mesh, const Options& options, bool twoDimensional)
+{
+  StageReport report;
+  report.Name = "interfaces";
+  report.TwoDimensional = twoDimensional;
+  const Clock::time_point start = Clock::now();
+  vtkNew<stmInterfaceSurface> interfaces;
+  Watch(interfaces);
+  interfaces->SetInputData(mesh);
+  interfaces->Update();
+  ThrowIfFailed("extracting the interfaces");
+  vtkPolyData* surface = interfaces->GetOutput();
+  const double extraction = SecondsSince(start);
+  MeshFormat format = MeshFormat::XMLPolyData;
+  FindMeshFormat(options.Interfaces, format); // checked with the command line
+  WriteMesh(surface, options.Interfaces, format, options.Compressor, report);
+  report.Seconds += extraction;
+  report.Cells = surface->GetNumberOfCells();
+  report.Points = surface->GetNumberOfPoints();
+  report.Description = std::to_string(report.Cells) +
+    (twoDimensional ? " segments, " : " facets, ") + report.Description;
+  return report;
+}
+
 /// Writes the mesh (a vtkUnstructuredGrid, or the cut's surface as a vtkPolyData).
 void WriteMesh(vtkPointSet* mesh, const std::string& path, MeshFormat format,
   const std::string& compressor, StageReport& report)
@@ -3252,7 +3330,9 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
     json << (i ? ", " : "") << "{\"sources\": " << JsonList(options.Merges[i].Sources)
          << ", \"target\": " << options.Merges[i].Target << "}";
   }
-  json << "], \"min_component_voxels\": " << options.MinComponentVoxels << "},\n";
+  json << "], \"min_component_voxels\": " << options.MinComponentVoxels << ", \"interfaces\": "
+       << (options.Interfaces.empty() ? std::string("null") : JsonString(options.Interfaces))
+       << "},\n";
   json << "  \"threads\": " << summary.Threads.Threads << ",\n";
   json << "  \"smp_backend\": " << JsonString(summary.Threads.Backend) << ",\n";
   // The spacetree's levels: cell edges in voxels per level, root first, along the image axes the
@@ -4498,6 +4578,10 @@ int Run(const Options& options)
     CheckReadableFile(options.Separating.GrayImage, true);
   }
   CheckWritableTarget(output, "output");
+  if (!options.Interfaces.empty())
+  {
+    CheckWritableTarget(options.Interfaces, "--interfaces");
+  }
   if (!options.SummaryPath.empty())
   {
     CheckWritableTarget(options.SummaryPath, "summary");
@@ -4689,6 +4773,10 @@ int Run(const Options& options)
   writeReport.Name = "write";
   WriteMesh(mesh, output, meshFormat, options.Compressor, writeReport);
   summary.Stages.push_back(writeReport);
+  if (!options.Interfaces.empty())
+  {
+    summary.Stages.push_back(WriteInterfaces(mesh, options, twoDimensional));
+  }
   summary.TotalSeconds = SecondsSince(start);
 
   summary.MaterialKey = MaterialCountKey(mesh, options, twoDimensional);

@@ -109,8 +109,8 @@ Status ExtractInterfaceFacets(const double* points, std::int64_t numberOfPoints,
       {
         if (block % 16 == 0)
         {
-          this->Runner->ReportProgress(0.3 +
-            0.5 * static_cast<double>(block) / static_cast<double>(this->PerBlock->size()));
+          this->Runner->ReportProgress(
+            0.3 + 0.5 * static_cast<double>(block) / static_cast<double>(this->PerBlock->size()));
         }
         InterfaceFacets<Dim>& out = (*this->PerBlock)[block];
         const std::int64_t last = std::min(this->NumberOfCells, (block + 1) * BlockSize);
