@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Fails when a tracked C++ file differs from clang-format's output (VTK style, .clang-format).
+# Fails when a C++ file (tracked, or new and not ignored) differs from clang-format's output
+# (VTK style, .clang-format).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 if ! git rev-parse --is-inside-work-tree > /dev/null 2>&1; then
@@ -12,6 +13,6 @@ while IFS= read -r file; do
     echo "check-format: $file is not clang-formatted (run: clang-format -i $file)"
     status=1
   fi
-done < <(git ls-files '*.h' '*.cxx')
+done < <(git ls-files --cached --others --exclude-standard '*.h' '*.cxx')
 [ "$status" -eq 0 ] && echo "check-format: all C++ files are formatted"
 exit "$status"
