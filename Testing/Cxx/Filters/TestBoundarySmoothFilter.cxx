@@ -47,27 +47,13 @@ double VolumeOfMaterial(const stm::MeshInvariantReport& report, int material)
 /// The unit box, n^3 voxels, 5 tetrahedra each, cut by the sphere (both sides kept).
 struct BallPipeline
 {
-  vtkNew<stmImageToSpacetree> Tree;
-  vtkNew<stmSpacetreeTessellate> Tessellate;
-  vtkNew<vtkSphere> Sphere;
-  vtkNew<stmSeparatingFunction> Function;
+  stmTest::UniformBallFunction Ball;
   vtkNew<stmMarchingSimplices> Cut;
 
   BallPipeline(int n, double radius)
+    : Ball(n, radius)
   {
-    const int dims[3] = { n, n, n };
-    const double h = 1.0 / n;
-    const double spacing[3] = { h, h, h }, origin[3] = { h / 2, h / 2, h / 2 };
-    auto image = stmTest::MakeLabelImage(dims, spacing, origin, [](int, int, int) { return 1; });
-    this->Tree->SetInputData(image);
-    this->Tree->SetMaxCellSize(1);
-    this->Tessellate->SetInputConnection(this->Tree->GetOutputPort());
-    this->Tessellate->SetSeparatingFunction(stmSpacetreeTessellate::NO_FUNCTION);
-    this->Sphere->SetCenter(0.5, 0.5, 0.5);
-    this->Sphere->SetRadius(radius);
-    this->Function->SetInputConnection(this->Tessellate->GetOutputPort());
-    this->Function->SetImplicitFunction(this->Sphere);
-    this->Cut->SetInputConnection(this->Function->GetOutputPort());
+    this->Cut->SetInputConnection(this->Ball.GetOutputPort());
     this->Cut->Update();
   }
   vtkUnstructuredGrid* Mesh() { return vtkUnstructuredGrid::SafeDownCast(this->Cut->GetOutput()); }
@@ -146,7 +132,7 @@ TEST(BoundarySmoothFilter, ProjectionAndMaxDisplacement)
   vtkUnstructuredGrid* input = ball.Mesh();
   vtkNew<stmBoundarySmooth> smooth;
   smooth->SetInputConnection(ball.Cut->GetOutputPort());
-  smooth->SetImplicitFunction(ball.Sphere);
+  smooth->SetImplicitFunction(ball.Ball.Sphere);
   smooth->ProjectToFunctionOn();
   smooth->SetNumberOfInteriorLayers(0);
   smooth->Update();
@@ -162,7 +148,7 @@ TEST(BoundarySmoothFilter, ProjectionAndMaxDisplacement)
     {
       ++moved;
       EXPECT_NEAR(
-        std::sqrt(vtkMath::Distance2BetweenPoints(y, ball.Sphere->GetCenter())), 0.35, 1e-6);
+        std::sqrt(vtkMath::Distance2BetweenPoints(y, ball.Ball.Sphere->GetCenter())), 0.35, 1e-6);
     }
   }
   EXPECT_EQ(moved, smooth->GetNumberOfMovedPoints());

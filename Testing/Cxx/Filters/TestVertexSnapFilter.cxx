@@ -182,28 +182,14 @@ TEST(VertexSnapFilter, SimplexQualityAgreesWithVerdict)
 /// The uniform mesh of the unit box (n^3 voxels) with the sphere of radius r as its function.
 struct BallPipeline
 {
-  vtkNew<stmImageToSpacetree> Tree;
-  vtkNew<stmSpacetreeTessellate> Tessellate;
-  vtkNew<vtkSphere> Sphere;
-  vtkNew<stmSeparatingFunction> Function;
+  stmTest::UniformBallFunction Ball;
   vtkNew<stmVertexSnap> Snap;
   vtkNew<stmMarchingSimplices> Cut;
 
   BallPipeline(int n, double radius)
+    : Ball(n, radius)
   {
-    const int dims[3] = { n, n, n };
-    const double h = 1.0 / n;
-    const double spacing[3] = { h, h, h }, origin[3] = { h / 2, h / 2, h / 2 };
-    auto image = stmTest::MakeLabelImage(dims, spacing, origin, [](int, int, int) { return 1; });
-    this->Tree->SetInputData(image);
-    this->Tree->SetMaxCellSize(1);
-    this->Tessellate->SetInputConnection(this->Tree->GetOutputPort());
-    this->Tessellate->SetSeparatingFunction(stmSpacetreeTessellate::NO_FUNCTION);
-    this->Sphere->SetCenter(0.5, 0.5, 0.5);
-    this->Sphere->SetRadius(radius);
-    this->Function->SetInputConnection(this->Tessellate->GetOutputPort());
-    this->Function->SetImplicitFunction(this->Sphere);
-    this->Snap->SetInputConnection(this->Function->GetOutputPort());
+    this->Snap->SetInputConnection(this->Ball.GetOutputPort());
     this->Snap->SetSnapRule(stmVertexSnap::THRESHOLD); // the tests below are about Alpha
     this->Cut->SetInputConnection(this->Snap->GetOutputPort());
   }
@@ -261,7 +247,7 @@ TEST(VertexSnapFilter, AnalyticBall)
             << ball.Snap->GetNumberOfRefusedSnaps() << " refused)\n";
 
   ball.Snap->SetProjection(stmVertexSnap::FUNCTION);
-  ball.Snap->SetImplicitFunction(ball.Sphere);
+  ball.Snap->SetImplicitFunction(ball.Ball.Sphere);
   mesh = ball.Mesh();
   EXPECT_TRUE(stmTest::CheckMesh<3>(mesh, Axes3, 1e-12).IsValid());
   flags = ball.Snapped()->GetPointData()->GetArray("Snapped");
@@ -339,9 +325,9 @@ TEST(VertexSnapFilter, GrayImageProjection)
   }
   gray->GetPointData()->SetScalars(values);
   BallPipeline mesh(12, 0.3);
-  mesh.Function->SetMode(stmSeparatingFunction::GRAY_IMAGE);
-  mesh.Function->SetInputDataObject(1, gray);
-  mesh.Function->SetThreshold(50.0);
+  mesh.Ball.Function->SetMode(stmSeparatingFunction::GRAY_IMAGE);
+  mesh.Ball.Function->SetInputDataObject(1, gray);
+  mesh.Ball.Function->SetThreshold(50.0);
   mesh.Snap->SetProjection(stmVertexSnap::FUNCTION);
   mesh.Snap->SetInputDataObject(1, gray);
   mesh.Snap->SetThreshold(50.0);

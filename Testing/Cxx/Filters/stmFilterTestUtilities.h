@@ -6,6 +6,7 @@
 #define stmFilterTestUtilities_h
 
 #include "stmImageToSpacetree.h"
+#include "stmSeparatingFunction.h"
 #include "stmSpacetreeBalance.h"
 #include "stmSpacetreeTessellate.h"
 
@@ -29,6 +30,7 @@
 #include "vtkPointData.h"
 #include "vtkPoints.h"
 #include "vtkSmartPointer.h"
+#include "vtkSphere.h"
 #include "vtkUnsignedShortArray.h"
 #include "vtkUnstructuredGrid.h"
 
@@ -147,6 +149,34 @@ struct AalBrainMask
     this->VoxelVolume = static_cast<double>(bodyVoxels) * spacing[0] * spacing[1] * spacing[2];
   }
   vtkAlgorithmOutput* GetOutputPort() { return this->Mask->GetOutputPort(); }
+};
+
+/// The unit box as n^3 voxels of edge 1/n, tessellated (5 tetrahedra per voxel, no function),
+/// with the function of the sphere of the given radius around the box's centre (vtkSphere, by
+/// stmSeparatingFunction): the analytic ball of the paper's Tables 1 and 2.
+struct UniformBallFunction
+{
+  vtkNew<stmImageToSpacetree> Tree;
+  vtkNew<stmSpacetreeTessellate> Tessellate;
+  vtkNew<vtkSphere> Sphere;
+  vtkNew<stmSeparatingFunction> Function;
+
+  UniformBallFunction(int n, double radius)
+  {
+    const int dims[3] = { n, n, n };
+    const double h = 1.0 / n;
+    const double spacing[3] = { h, h, h }, origin[3] = { h / 2, h / 2, h / 2 };
+    auto image = MakeLabelImage(dims, spacing, origin, [](int, int, int) { return 1; });
+    this->Tree->SetInputData(image);
+    this->Tree->SetMaxCellSize(1);
+    this->Tessellate->SetInputConnection(this->Tree->GetOutputPort());
+    this->Tessellate->SetSeparatingFunction(stmSpacetreeTessellate::NO_FUNCTION);
+    this->Sphere->SetCenter(0.5, 0.5, 0.5);
+    this->Sphere->SetRadius(radius);
+    this->Function->SetInputConnection(this->Tessellate->GetOutputPort());
+    this->Function->SetImplicitFunction(this->Sphere);
+  }
+  vtkAlgorithmOutput* GetOutputPort() { return this->Function->GetOutputPort(); }
 };
 
 struct Pipeline
