@@ -278,17 +278,8 @@ int stmBoundarySmooth::RequestData(
   this->UpdateProgress(0.05);
 
   vtkCellArray* cells = input->GetCells();
-  stm::Status status;
-  if (cells->IsStorage64Bit())
-  {
-    const vtkTypeInt64* ids = cells->GetConnectivityArray64()->GetPointer(0);
-    status = dimension == 3 ? Smooth<3>(request, ids) : Smooth<2>(request, ids);
-  }
-  else
-  {
-    const vtkTypeInt32* ids = cells->GetConnectivityArray32()->GetPointer(0);
-    status = dimension == 3 ? Smooth<3>(request, ids) : Smooth<2>(request, ids);
-  }
+  const stm::Status status = stmCutInput::DispatchSimplices(cells, dimension,
+    [&](auto dim, const auto* ids) { return Smooth<decltype(dim)::value>(request, ids); });
   if (!status.IsOk())
   {
     output->Initialize();

@@ -11,21 +11,41 @@
 #ifndef stmCutInput_h
 #define stmCutInput_h
 
+#include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkCellType.h"
 #include "vtkDataArray.h"
 #include "vtkDataObject.h"
 #include "vtkPointData.h"
 #include "vtkSMPTools.h"
+#include "vtkTypeInt32Array.h"
+#include "vtkTypeInt64Array.h"
 #include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 
 #include <cstdint>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace stmCutInput
 {
+/// The one dispatch of the simplicial filters: run(std::integral_constant<int, Dim>, ids) with
+/// the cells' connectivity as stored (32- or 64-bit ids) and Dim 3 for tetrahedra, else 2.
+template <class Run>
+auto DispatchSimplices(vtkCellArray* cells, int dimension, Run&& run)
+{
+  using Three = std::integral_constant<int, 3>;
+  using Two = std::integral_constant<int, 2>;
+  if (cells->IsStorage64Bit())
+  {
+    const vtkTypeInt64* ids = cells->GetConnectivityArray64()->GetPointer(0);
+    return dimension == 3 ? run(Three(), ids) : run(Two(), ids);
+  }
+  const vtkTypeInt32* ids = cells->GetConnectivityArray32()->GetPointer(0);
+  return dimension == 3 ? run(Three(), ids) : run(Two(), ids);
+}
+
 /// The cell array "Material" as 64-bit integers (in parallel); empty without it.
 inline std::vector<std::int64_t> CellMaterials(vtkUnstructuredGrid* input)
 {

@@ -185,19 +185,9 @@ int stmInterfaceSurface::RequestData(
   this->UpdateProgress(0.05);
 
   vtkCellArray* cells = input->GetCells();
-  stm::Status status;
-  if (cells->IsStorage64Bit())
-  {
-    const vtkTypeInt64* ids = cells->GetConnectivityArray64()->GetPointer(0);
-    status = dimension == 3 ? Extract<3>(this, input, frame, ids, options, output)
-                            : Extract<2>(this, input, frame, ids, options, output);
-  }
-  else
-  {
-    const vtkTypeInt32* ids = cells->GetConnectivityArray32()->GetPointer(0);
-    status = dimension == 3 ? Extract<3>(this, input, frame, ids, options, output)
-                            : Extract<2>(this, input, frame, ids, options, output);
-  }
+  const stm::Status status = stmCutInput::DispatchSimplices(cells, dimension,
+    [&](auto dim, const auto* ids)
+    { return Extract<decltype(dim)::value>(this, input, frame, ids, options, output); });
   if (!status.IsOk())
   {
     output->Initialize();

@@ -510,17 +510,8 @@ int stmMarchingSimplices::RequestData(
     : this->KeepSide == INSIDE                       ? stm::KeptSides::Inside
     : this->KeepSide == OUTSIDE                      ? stm::KeptSides::Outside
                                                      : stm::KeptSides::Both;
-  stm::Status status;
-  if (cells->IsStorage64Bit())
-  {
-    const vtkTypeInt64* ids = cells->GetConnectivityArray64()->GetPointer(0);
-    status = dimension == 3 ? Cut<3>(request, ids, output) : Cut<2>(request, ids, output);
-  }
-  else
-  {
-    const vtkTypeInt32* ids = cells->GetConnectivityArray32()->GetPointer(0);
-    status = dimension == 3 ? Cut<3>(request, ids, output) : Cut<2>(request, ids, output);
-  }
+  const stm::Status status = stmCutInput::DispatchSimplices(cells, dimension,
+    [&](auto dim, const auto* ids) { return Cut<decltype(dim)::value>(request, ids, output); });
   if (!status.IsOk())
   {
     output->Initialize();

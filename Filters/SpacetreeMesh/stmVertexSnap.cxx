@@ -262,17 +262,8 @@ int stmVertexSnap::RequestData(
   request.Options.IsoValue = this->IsoValue;
   request.Options.ZeroTolerance = this->ZeroTolerance;
   vtkCellArray* cells = input->GetCells();
-  stm::Status status;
-  if (cells->IsStorage64Bit())
-  {
-    const vtkTypeInt64* ids = cells->GetConnectivityArray64()->GetPointer(0);
-    status = dimension == 3 ? Snap<3>(request, ids, error) : Snap<2>(request, ids, error);
-  }
-  else
-  {
-    const vtkTypeInt32* ids = cells->GetConnectivityArray32()->GetPointer(0);
-    status = dimension == 3 ? Snap<3>(request, ids, error) : Snap<2>(request, ids, error);
-  }
+  const stm::Status status = stmCutInput::DispatchSimplices(cells, dimension,
+    [&](auto dim, const auto* ids) { return Snap<decltype(dim)::value>(request, ids, error); });
   if (!status.IsOk())
   {
     output->Initialize();
