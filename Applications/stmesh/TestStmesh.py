@@ -45,7 +45,8 @@ DEFAULT_TESSELLATE_PARAMETERS = {
     "elements": "simplicial", "templates": "regular", "cell_template": "checkerboard",
     "boundary_layers": 0}
 # The cut parameters of the summary when none of their options is given, and with STAIRCASE.
-DEFAULT_CUT_PARAMETERS = {"separating": "labels", "output_mode": "volume", "keep": "both",
+DEFAULT_CUT_PARAMETERS = {"separating": "labels", "materials": "merged", "output_mode": "volume",
+                          "keep": "both",
                           "iso": 0, "alpha": 1.0 / 3.0, "snap": "quality",
                           "smooth_iterations": 20, "smooth_method": "taubin"}
 STAIRCASE_CUT_PARAMETERS = dict(DEFAULT_CUT_PARAMETERS, separating="none")
@@ -2542,6 +2543,80 @@ def case_option_merge(c):
     output = c.path("gone.vtu")
     c.run_failing([image, "-o", output, "--merge", "1,2:10", "--labels", "1"] + STAIRCASE, 1,
                   "Body label 1 does not occur", output=output)
+
+
+def case_materials_separate(c):
+    # Every label its own material: the ball (label 1) around a small box (label 3), and two
+    # touching boxes (labels 1, 2) meeting the background along triple lines.
+    image, voxels = write_label_image(c, "ball.vti", (16, 15, 14), ball)
+    output, summary_path = c.path("ball.vtu"), c.path("ball.json")
+    out, _ = c.run_ok([image, "-o", output, "--summary", summary_path, "--materials", "separate"])
+    summary = load_summary(summary_path)
+    check([entry["name"] for entry in summary["stages"]] == STAGES_ALL,
+          "stages %s" % [entry["name"] for entry in summary["stages"]])
+    check(summary["parameters"]["materials"] == "separate",
+          "parameters.materials %s" % summary["parameters"]["materials"])
+    check(stage(summary, "snap")["skipped"] and "skipped (--materials separate)" in out,
+          "the snap stage was not skipped")
+    mesh = read_cut(output)
+    check(set(mesh["materials"]) == {0, 1, 3}, "Material values %s" % sorted(set(mesh["materials"])))
+    check(min(mesh["measures"]) > 0, "a cell has measure %r" % min(mesh["measures"]))
+    # The small box (3 x 2 x 4 voxels) keeps less than half its volume: the labels function
+    # rounds its edges as the binary cut of it alone would.
+    volumes = material_volumes(mesh)
+    check(abs(volumes[1] - voxels["1"]) <= 0.1 * voxels["1"],
+          "label 1 measures %r, its voxels %d" % (volumes[1], voxels["1"]))
+    check(0.3 * voxels["3"] < volumes[3] < voxels["3"],
+          "label 3 measures %r, its voxels %d" % (volumes[3], voxels["3"]))
+    entries = {entry["material"]: entry for entry in summary["materials"]}
+    check(sorted(entries) == [0, 1, 3], "report materials %s" % sorted(entries))
+    check(entries[1]["voxels"] == voxels["1"] and entries[3]["voxels"] == voxels["3"] and
+          entries[1]["lost_components"] == 0 and entries[3]["lost_components"] == 0,
+          "report %s" % entries)
+    check(close(entries[3]["mesh_volume"], volumes[3]), "report volume of 3 %r, the file's %r"
+          % (entries[3]["mesh_volume"], volumes[3]))
+    # The cut alone: the tessellation's domain, every piece inside one of its cells.
+    boxes, box_voxels = write_label_image(c, "boxes.vti", (12, 10, 8), two_boxes)
+    output, summary_path = c.path("boxes.vtu"), c.path("boxes.json")
+    out, _ = c.run_ok([boxes, "-o", output, "--summary", summary_path, "--materials", "separate",
+                       "--stop-after", "cut"])
+    summary = load_summary(summary_path)
+    check([entry["name"] for entry in summary["stages"]] == STAGES_CUT,
+          "stages %s" % [entry["name"] for entry in summary["stages"]])
+    cut = stage(summary, "cut")
+    mesh = read_cut(output)
+    check(set(mesh["materials"]) == {0, 1, 2}, "Material values %s" % sorted(set(mesh["materials"])))
+    check(set(mesh["original"]) == {0, 1, 2}, "OriginalMaterial values %s" %
+          sorted(set(mesh["original"])))
+    check(cut["split_cells"] > 0 and cut["points"] == stage(summary, "tessellate")["points"] +
+          cut["cut_points"], "cut figures %s" % cut)
+    check(cut["inside_cells"] == sum(1 for m in mesh["materials"] if m != 0),
+          "inside_cells %s" % cut["inside_cells"])
+    check(close(sum(mesh["measures"]), staircase_volume(c, boxes, "staircase", 1)),
+          "the cut does not cover the staircase with one background layer")
+    volumes = material_volumes(mesh)
+    for label in ("1", "2"):
+        check(abs(volumes[int(label)] - box_voxels[label]) <= 0.2 * box_voxels[label],
+              "label %s measures %r, its voxels %d" % (label, volumes[int(label)],
+                                                       box_voxels[label]))
+    # What does not apply to several materials.
+    for arguments, text in [
+            (["--output-mode", "surface", "-o", c.path("s.vtp")], "applies to one body"),
+            (["--keep", "inside"], "--keep applies to one body"),
+            (["--iso", "0.5"], "--iso applies to one body"),
+            (["--separating", "smooth:1"], "--materials separate cuts at the interfaces"),
+            (["--separating", "sphere:8,7,6,4"], "--materials separate cuts at the interfaces")]:
+        arguments = ([boxes, "--materials", "separate"] +
+                     (["-o", c.path("x.vtu")] if "-o" not in arguments else []) + arguments)
+        c.run_failing(arguments, 2, text)
+    c.run_failing([boxes, "-o", c.path("x.vtu"), "--materials", "bogus"], 2,
+                  "--materials: 'bogus' is not one of merged, separate")
+    # Ignored, with a warning.
+    _, err = c.run_ok([boxes, "-o", c.path("w1.vtu"), "--materials", "separate"] + STAIRCASE)
+    check("--materials applies to the cut stage only" in err, "no warning for --separating none")
+    _, err = c.run_ok([boxes, "-o", c.path("w2.vtu"), "--materials", "separate", "--snap",
+                       "threshold", "--stop-after", "cut"])
+    check("--snap is ignored with --materials separate" in err, "no warning for --snap")
 
 
 def case_error_merge_values(c):

@@ -26,6 +26,7 @@
 #include "stmImageToSpacetree.h"
 #include "stmInterfaceSurface.h"
 #include "stmMarchingSimplices.h"
+#include "stmMultiMaterialCut.h"
 #include "stmSeparatingFunction.h"
 #include "stmSpacetreeBalance.h"
 #include "stmSpacetreeTessellate.h"
@@ -146,7 +147,7 @@ const char* const UsageText =
               [--cell-template checkerboard|kuhn] [--boundary-layer N]
               [--separating labels|smooth:SIGMA|gray:FILE:ISO|sphere:CX,CY,CZ,R|none]
               [--output-mode volume|surface] [--keep both|inside|outside] [--iso V]
-              [--alpha A] [--snap threshold|quality|none]
+              [--materials merged|separate] [--alpha A] [--snap threshold|quality|none]
               [--smooth-iterations N] [--smooth-method taubin|laplacian]
               [--stop-after spacetree|balance|tessellate|snap|cut|smooth] [--threads N]
               [--summary FILE.json] [--compressor lz4|zlib|none] [--interfaces FILE.vtp]
@@ -171,6 +172,12 @@ Arguments:
   --labels L1,L2,...|all
                         labels that form the body of interest. Default (or all): every
                         non-zero label.
+  --materials M         what the cut stage makes of the body's labels: merged (the default:
+                        one body, the binary cut) or separate (every label its own material,
+                        cut at the interfaces between them with conforming triple lines and
+                        quadruple points; needs --separating labels; no snap stage yet, and
+                        --output-mode surface, --keep and --iso do not apply: --interfaces
+                        writes the interfaces).
   --merge S1,S2,...:T   merge labels before meshing: the voxels of the source labels S1, S2, ...
                         get label T (a new label, one of the sources, or a label the image
                         already holds). Repeat the option for several groups, as in
@@ -655,6 +662,7 @@ struct Options
   std::vector<std::string> SmoothOnlyOptions;     // --smooth-iterations, --smooth-method if given
   bool SeparatingGiven = false;
   bool StopAfterGiven = false;
+  bool SeparateMaterials = false; // --materials separate
 
   /// Whether the run reaches the snap stage (it may still skip it: --snap none), the cut stage
   /// and the smooth stage; whether the smooth stage does anything; whether the run writes the
@@ -662,7 +670,10 @@ struct Options
   bool ReachesSnap() const { return this->StopAfter >= StopStage::Snap; }
   bool Cuts() const { return this->StopAfter >= StopStage::Cut; }
   bool ReachesSmooth() const { return this->StopAfter == StopStage::Smooth; }
-  bool Snaps() const { return this->ReachesSnap() && this->SnapRule != NoSnap; }
+  bool Snaps() const
+  {
+    return this->ReachesSnap() && this->SnapRule != NoSnap && !this->SeparateMaterials;
+  }
   bool Smooths() const { return this->ReachesSmooth() && this->SmoothIterations > 0; }
   bool WritesSurface() const
   {
@@ -1223,8 +1234,8 @@ Options ParseCommandLine(int argc, char* argv[])
       "--root-cell-size", "--max-cell-size-label", "--refine-region", "--grading", "--sizing-array",
       "--balance-label", "--balance-region", "--elements", "--templates", "--cell-template",
       "--boundary-layer", "--separating", "--output-mode", "--keep", "--iso", "--alpha", "--snap",
-      "--smooth-iterations", "--smooth-method", "--merge", "--min-component-voxels",
-      "--interfaces" };
+      "--smooth-iterations", "--smooth-method", "--merge", "--min-component-voxels", "--interfaces",
+      "--materials" };
     if (valueOptions.count(name) == 0)
     {
       throw UsageError("unknown option '" + name + "'");
@@ -1333,6 +1344,14 @@ Options ParseCommandLine(int argc, char* argv[])
         throw UsageError("--alpha: A must be between 0 and 0.5, got " + value);
       }
       options.SnapOnlyOptions.push_back(name);
+    }
+    else if (name == "--materials")
+    {
+      if (value != "merged" && value != "separate")
+      {
+        throw UsageError("--materials: '" + value + "' is not one of merged, separate");
+      }
+      options.SeparateMaterials = value == "separate";
     }
     else if (name == "--snap")
     {
@@ -1478,6 +1497,25 @@ Options ParseCommandLine(int argc, char* argv[])
       ": cutting at the separating function (--separating " + options.Separating.Text +
       ") needs simplicial elements; give --separating none for a " +
       KeywordName(options.Elements, ElementKinds) + " mesh of the voxels");
+  }
+
+  if (options.SeparateMaterials && options.Cuts())
+  {
+    if (options.Separating.Kind != SeparatingKind::Labels)
+    {
+      throw UsageError("--materials separate cuts at the interfaces of the labels, but "
+                       "--separating is " +
+        options.Separating.Text + "; give --separating labels (the default)");
+    }
+    for (const std::string& name : options.CutOnlyOptions)
+    {
+      if (name != "--output-mode" || options.OutputMode != stmMarchingSimplices::VOLUME)
+      {
+        throw UsageError(name +
+          " applies to one body, not to --materials separate; write the "
+          "interfaces between the materials with --interfaces");
+      }
+    }
   }
 
   MeshFormat format;
@@ -3317,6 +3355,7 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
        << ", \"balance_labels\": " << JsonLabelMap(options.LabelBalanceLevels)
        << ", \"balance_region\": " << JsonRegion(options.BalanceRegion, true)
        << ", \"separating\": " << JsonString(options.Separating.Text)
+       << ", \"materials\": " << JsonString(options.SeparateMaterials ? "separate" : "merged")
        << ", \"output_mode\": " << JsonString(KeywordName(options.OutputMode, OutputModes))
        << ", \"keep\": " << JsonString(KeywordName(options.KeepSide, KeptSides))
        << ", \"iso\": " << JsonNumber(options.IsoValue)
@@ -3537,12 +3576,22 @@ void WarnAboutIgnoredCutOptions(const Options& options)
                        "--output-mode surface\n";
     }
   }
+  if (options.SeparateMaterials && !options.Cuts())
+  {
+    Diagnostics() << "stmesh: warning: --materials applies to the cut stage only; ignored "
+                  << ignoredWith << " (the staircase keeps every label)\n";
+  }
   for (const std::string& name : options.SnapOnlyOptions)
   {
     if (!options.ReachesSnap())
     {
       Diagnostics() << "stmesh: warning: " << name << " applies to the snap stage only; ignored "
                     << ignoredWith << '\n';
+    }
+    else if (options.SeparateMaterials)
+    {
+      Diagnostics() << "stmesh: warning: " << name
+                    << " is ignored with --materials separate, which has no snap stage yet\n";
     }
     else if (name == "--alpha" && options.SnapRule != stmVertexSnap::THRESHOLD)
     {
@@ -3684,11 +3733,44 @@ vtkSmartPointer<vtkUnstructuredGrid> WithLabelsAsMaterial(vtkUnstructuredGrid* g
   return copy;
 }
 
+/// The cut stage of --materials separate: stmMultiMaterialCut, every label its own material,
+/// the background (0) peeled last. The inside cells are those of the body's labels.
+vtkSmartPointer<vtkPointSet> RunMultiMaterialCut(
+  vtkSmartPointer<vtkUnstructuredGrid> grid, StageReport& report)
+{
+  vtkNew<stmMultiMaterialCut> cut;
+  cut->SetBackgroundMaterial(0);
+  vtkSmartPointer<vtkPointSet> mesh =
+    RunFilter(cut, grid, "cutting the mesh at the material interfaces", report);
+  grid = nullptr;
+  report.Cut = true;
+  report.SplitCells = static_cast<long long>(cut->GetNumberOfSplitCells());
+  report.CutPoints = static_cast<long long>(cut->GetNumberOfCutPoints());
+  report.InsideCells = 0;
+  report.OutsideCells = 0;
+  if (vtkDataArray* materials = mesh->GetCellData()->GetArray("Material"))
+  {
+    for (vtkIdType cell = 0; cell < materials->GetNumberOfTuples(); ++cell)
+    {
+      ++(materials->GetTuple1(cell) != 0 ? report.InsideCells : report.OutsideCells);
+    }
+  }
+  std::ostringstream description;
+  description << report.Cells << " cells, " << report.Points << " points, "
+              << cut->GetNumberOfMaterials() << " materials";
+  report.Description = description.str();
+  return mesh;
+}
+
 /// The cut stage: stmMarchingSimplices. With a smooth stage after it, the cut keeps both sides
 /// in volume mode, and the side (--keep) or the surface is taken after smoothing.
 vtkSmartPointer<vtkPointSet> RunCut(
   vtkSmartPointer<vtkUnstructuredGrid> grid, const Options& options, StageReport& report)
 {
+  if (options.SeparateMaterials)
+  {
+    return RunMultiMaterialCut(std::move(grid), report);
+  }
   const bool smoothingFollows = options.Smooths();
   const int outputMode = smoothingFollows ? stmMarchingSimplices::VOLUME : options.OutputMode;
   const int keepSide = smoothingFollows ? stmMarchingSimplices::BOTH : options.KeepSide;
@@ -4057,11 +4139,12 @@ StructureReport MakeStructureReport(
   const int ny = image.Dimensions[1];
   const int nz = image.Dimensions[2];
 
-  // How the mesh's Material is defined: with a cut the body labels are the inside material,
-  // without one they keep their label; every other label is the background, 0.
+  // How the mesh's Material is defined: with a cut of one body the body labels are the inside
+  // material, without one (or with --materials separate) they keep their label; every other
+  // label is the background, 0.
   std::vector<long long> body(options.Labels.begin(), options.Labels.end());
   std::sort(body.begin(), body.end());
-  const bool cut = options.Cuts();
+  const bool cut = options.Cuts() && !options.SeparateMaterials;
   const long long inside = InsideMaterial(options);
   ExtractRuns extract;
   extract.Dimensions = image.Dimensions;
@@ -4725,7 +4808,8 @@ int Run(const Options& options)
     if (!options.Snaps())
     {
       snapReport.Skipped = true;
-      snapReport.Description = "skipped (--snap none)";
+      snapReport.Description =
+        options.SeparateMaterials ? "skipped (--materials separate)" : "skipped (--snap none)";
     }
     else
     {

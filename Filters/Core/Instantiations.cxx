@@ -6,6 +6,7 @@
 #include "Balance/SpacetreeGrading.h"
 #include "Check/MeshInvariants.h"
 #include "Cut/MarchingSimplices.h"
+#include "Cut/MultiMaterialCut.h"
 #include "Cut/SeparatingFunction.h"
 #include "Cut/VertexSnap.h"
 #include "Smooth/BoundarySmooth.h"
@@ -53,6 +54,15 @@ void InstantiatePipeline()
     nullptr, nullptr, executor);
   std::vector<std::int64_t> facets, parents;
   cutter.ExtractSurface(static_cast<const std::int64_t*>(nullptr), facets, parents, executor);
+  MultiMaterialCut<Dim> materials;
+  materials.Run(0, static_cast<const std::int64_t*>(nullptr), 0, nullptr, 1, MaterialFractions(),
+    MultiMaterialCutOptions(), executor);
+  if constexpr (Dim <= 3)
+  {
+    MaterialFractions fractions;
+    CornerFractions<Dim>(static_cast<const double*>(nullptr), 0,
+      static_cast<const std::int32_t*>(nullptr), 0, nullptr, 1, -1, fractions, executor);
+  }
   VertexSnap<Dim> snap;
   snap.Snap(static_cast<double*>(nullptr), nullptr, 0, static_cast<const std::int64_t*>(nullptr), 0,
     VertexSnapOptions(), executor);

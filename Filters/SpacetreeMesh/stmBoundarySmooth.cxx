@@ -208,24 +208,19 @@ int stmBoundarySmooth::RequestData(
   this->NumberOfMovedPoints = 0;
   this->NumberOfRejectedMoves = 0;
   output->Initialize();
-  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
-  if (inInfo && inInfo->Get(vtkAlgorithm::ABORTED()))
-  {
-    return 1; // an upstream filter was aborted: an empty output, quietly
-  }
   auto fail = [&](const std::string& message)
   {
     output->Initialize();
     vtkErrorMacro(<< "BoundarySmooth failed: " << message);
     return 0;
   };
-  if (!input || input->GetNumberOfCells() == 0 || !input->GetPoints())
-  {
-    return fail("the input mesh has no cells");
-  }
   std::string typeError;
-  const int dimension = stmCutInput::SimplexDimension(
-    input, "cut it with Marching Simplices or tetrahedralize it first", typeError);
+  const int dimension = stmCutInput::Preflight(
+    inputVector[0], input, "cut it with Marching Simplices or tetrahedralize it first", typeError);
+  if (dimension < 0)
+  {
+    return 1; // an upstream filter was aborted: an empty output, quietly
+  }
   if (dimension == 0)
   {
     return fail(typeError);

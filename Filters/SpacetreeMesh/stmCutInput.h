@@ -11,11 +11,14 @@
 #ifndef stmCutInput_h
 #define stmCutInput_h
 
+#include "vtkAlgorithm.h"
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkCellType.h"
 #include "vtkDataArray.h"
 #include "vtkDataObject.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
 #include "vtkPointData.h"
 #include "vtkSMPTools.h"
 #include "vtkTypeInt32Array.h"
@@ -103,6 +106,26 @@ inline int SimplexDimension(vtkUnstructuredGrid* input, const char* remedy, std:
       std::to_string(offendingType) + "; " + remedy;
   }
   return dimension;
+}
+
+/// The checks every simplicial filter makes first: -1 when an upstream filter was aborted (the
+/// filter then returns 1 with an empty output, quietly); 0 with `error` set when the input has
+/// no cells, or cells that are not all tetrahedra or all triangles (`remedy` says what to do);
+/// else the dimension, 3 or 2.
+inline int Preflight(vtkInformationVector* inputVector, vtkUnstructuredGrid* input,
+  const char* remedy, std::string& error)
+{
+  vtkInformation* inInfo = inputVector->GetInformationObject(0);
+  if (inInfo && inInfo->Get(vtkAlgorithm::ABORTED()))
+  {
+    return -1;
+  }
+  if (!input || input->GetNumberOfCells() == 0 || !input->GetPoints())
+  {
+    error = "the input mesh has no cells";
+    return 0;
+  }
+  return SimplexDimension(input, remedy, error);
 }
 
 /// What the cutting filters tell a user whose mesh is not simplicial.

@@ -141,25 +141,20 @@ int stmInterfaceSurface::RequestData(
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0], 0);
   vtkPolyData* output = vtkPolyData::GetData(outputVector, 0);
   output->Initialize();
-  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
-  if (inInfo && inInfo->Get(vtkAlgorithm::ABORTED()))
-  {
-    return 1; // an upstream filter was aborted: an empty output, quietly
-  }
   auto fail = [&](const std::string& message)
   {
     output->Initialize();
     vtkErrorMacro(<< "InterfaceSurface failed: " << message);
     return 0;
   };
-  if (!input || input->GetNumberOfCells() == 0 || !input->GetPoints())
-  {
-    return fail("the input mesh has no cells");
-  }
   std::string problem;
-  const int dimension = stmCutInput::SimplexDimension(input,
+  const int dimension = stmCutInput::Preflight(inputVector[0], input,
     "tessellate with Output Type Simplicial, cut with Marching Simplices or tetrahedralize first",
     problem);
+  if (dimension < 0)
+  {
+    return 1; // an upstream filter was aborted: an empty output, quietly
+  }
   if (dimension == 0)
   {
     return fail(problem);

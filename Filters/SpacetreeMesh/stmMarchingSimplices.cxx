@@ -468,24 +468,19 @@ int stmMarchingSimplices::RequestData(
     return 0;
   }
   output->Initialize();
-  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
-  if (inInfo && inInfo->Get(vtkAlgorithm::ABORTED()))
-  {
-    return 1; // an upstream filter was aborted: an empty output, quietly
-  }
   auto fail = [&](const std::string& message)
   {
     output->Initialize();
     vtkErrorMacro(<< "MarchingSimplices failed: " << message);
     return 0;
   };
-  if (!input || input->GetNumberOfCells() == 0)
-  {
-    return fail("the input mesh has no cells");
-  }
   std::string error;
   const int dimension =
-    stmCutInput::SimplexDimension(input, stmCutInput::TessellateSimplicialFirst, error);
+    stmCutInput::Preflight(inputVector[0], input, stmCutInput::TessellateSimplicialFirst, error);
+  if (dimension < 0)
+  {
+    return 1; // an upstream filter was aborted: an empty output, quietly
+  }
   if (dimension == 0)
   {
     return fail(error);

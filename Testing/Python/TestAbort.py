@@ -42,7 +42,9 @@ smooth.SetInputConnection(cut.GetOutputPort())
 smooth.SetNumberOfIterations(3)
 interfaces = spacetreemesh.stmInterfaceSurface()
 interfaces.SetInputConnection(mesh.GetOutputPort())
-FILTERS = (tree, balance, mesh, cut, smooth, snap, interfaces)
+materials = spacetreemesh.stmMultiMaterialCut()
+materials.SetInputConnection(mesh.GetOutputPort())
+FILTERS = (tree, balance, mesh, cut, smooth, snap, interfaces, materials)
 errors = {f.GetClassName(): T.ErrorCollector(f) for f in FILTERS}
 
 
@@ -112,7 +114,8 @@ for algorithm in FILTERS:
     # Threshold 0: the first event (progress 0, before RequestData). 0.3: inside the parallel work
     # of every filter (ImageToSpacetree builds in 0.2-0.9, Balance and Tessellate start at 0.1,
     # MarchingSimplices classifies in 0.05-0.45 and writes in 0.45-0.85, BoundarySmooth iterates
-    # in 0.14-0.95, 3 iterations here, InterfaceSurface walks the facets in 0.275-0.65).
+    # in 0.14-0.95, 3 iterations here, InterfaceSurface walks the facets in 0.275-0.65,
+    # MultiMaterialCut peels the 117 materials in 0.15-0.85).
     for threshold in (0.0, 0.3):
         what = "%s aborted at progress >= %g" % (name, threshold)
         state, observer = abort_at(threshold)

@@ -34,6 +34,7 @@ EXPECTED_PROXIES = {
     ("filters", "stmSpacetreeBalance"),
     ("filters", "stmSpacetreeTessellate"),
     ("filters", "stmMarchingSimplices"),
+    ("filters", "stmMultiMaterialCut"),
     ("filters", "stmSeparatingFunction"),
     ("filters", "stmVertexSnap"),
     ("filters", "stmBoundarySmooth"),
@@ -81,6 +82,9 @@ PRINTED_DEFAULTS = {
                           "NumberOfRejectedMoves: 0"],
     "stmInterfaceSurface": ["IncludeOuterBoundary: On", "BackgroundMaterial: 0",
                             "OuterLabel: -1"],
+    "stmMultiMaterialCut": ["BackgroundMaterial: 0", "ZeroTolerance: 1e-09",
+                            "NumberOfMaterials: 0", "NumberOfSplitCells: 0",
+                            "NumberOfSplitAssignedCells: 0", "NumberOfCutPoints: 0"],
 }
 
 problems = []

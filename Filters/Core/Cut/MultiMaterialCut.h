@@ -1,0 +1,725 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#ifndef stmCoreMultiMaterialCut_h
+#define stmCoreMultiMaterialCut_h
+
+// Cutting a labelled simplicial mesh at the interfaces between any number of materials.
+//
+// Material fractions (CornerFractions): every point gets, for each material, the share of the
+// angle (2D) or solid angle (3D) around it that the cells of that material cover. On the
+// tessellation of a label image, whose points lie on the lattice of half voxels, this equals the
+// d-linear interpolation of the material's voxel indicator on the dual grid: 1/2^d per voxel at a
+// voxel corner, as the binary labels function (paper eq. 2) has it for the body. A material's
+// region is where its fraction is the largest; the fractions are carried as a sparse vector per
+// point, the vector-valued affiliation of the paper's section 3.
+//
+// Peeling (MultiMaterialCut): the K materials are taken in a fixed order m_0, ..., m_(K-1). Step
+// k cuts the cells not yet assigned ("remaining") with the binary marching simplices at the zero
+// of
+//   g_k = max_{j > k} phi_j - phi_k
+// and gives the negative pieces material m_k; what is left after step K - 2 is m_(K-1). A cut
+// point's fractions are the linear interpolation of its edge's ends at the cut, so the next steps
+// see the same piecewise linear fractions. A cut must split every cell around its edge, assigned
+// or not, for the mesh to stay conforming; so g_k is taken as 0 at points that no remaining cell
+// uses. An assigned cell then has an edge cut only when both ends touch the remaining region and
+// g_k changes sign between them, which happens where the step's interface meets an earlier one
+// (a triple line); its pieces keep its material. Step k visits only the cells whose points carry
+// m_k (a negative point carries it, and so does every cell around it), so the total work follows
+// the cells near the interfaces. Everything is deterministic: the steps are sequential and each
+// cut numbers its points in sorted edge order.
+//
+// A remaining cell whose points all have g_k = 0 (a tie, e.g. inside a flat one-voxel-thick
+// layer, whose voxel corners are all ties) goes to m_k when its input cell was m_k, or was a
+// material already peeled and m_k is present at one of its points; so thin layers of either
+// side are kept.
+
+#include "../Common/Execution.h"
+#include "../Common/PointCells.h"
+#include "../Common/Status.h"
+#include "MarchingSimplices.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace stm
+{
+
+/// Sparse per-point material fractions in compressed rows, each row sorted by material index
+/// (the position in the peeling order).
+struct MaterialFractions
+{
+  std::vector<std::int64_t> Offsets{ 0 }; // numberOfPoints + 1
+  std::vector<std::int32_t> Materials;
+  std::vector<double> Values;
+
+  std::int64_t GetNumberOfPoints() const
+  {
+    return static_cast<std::int64_t>(this->Offsets.size()) - 1;
+  }
+
+  /// The fraction of `material` at `point` (0 when absent).
+  double Of(std::int64_t point, std::int32_t material) const
+  {
+    for (std::int64_t e = this->Offsets[point]; e < this->Offsets[point + 1]; ++e)
+    {
+      if (this->Materials[e] == material)
+      {
+        return this->Values[e];
+      }
+    }
+    return 0.0;
+  }
+
+  /// Appends a point whose fractions are (1 - t) a + t b.
+  void AppendInterpolated(std::int64_t a, std::int64_t b, double t)
+  {
+    std::int64_t i = this->Offsets[a], j = this->Offsets[b];
+    const std::int64_t iEnd = this->Offsets[a + 1], jEnd = this->Offsets[b + 1];
+    while (i < iEnd || j < jEnd)
+    {
+      std::int32_t material;
+      double value = 0.0;
+      if (j >= jEnd || (i < iEnd && this->Materials[i] < this->Materials[j]))
+      {
+        material = this->Materials[i];
+        value = (1.0 - t) * this->Values[i++];
+      }
+      else if (i >= iEnd || this->Materials[j] < this->Materials[i])
+      {
+        material = this->Materials[j];
+        value = t * this->Values[j++];
+      }
+      else
+      {
+        material = this->Materials[i];
+        value = (1.0 - t) * this->Values[i++] + t * this->Values[j++];
+      }
+      if (value > 0.0)
+      {
+        this->Materials.push_back(material);
+        this->Values.push_back(value);
+      }
+    }
+    this->Offsets.push_back(static_cast<std::int64_t>(this->Materials.size()));
+  }
+};
+
+/// The angle (2D), solid angle (3D) or 1 (1D) of a simplex at its corner `corner`, from points
+/// with three coordinates each (a 2D mesh may lie in any plane).
+template <int Dim>
+double CornerAngle(const double* const* corners, int corner)
+{
+  static_assert(Dim >= 1 && Dim <= 3, "corner angles are defined for dimensions 1 to 3");
+  if (Dim == 1)
+  {
+    return 1.0;
+  }
+  const double* apex = corners[corner];
+  double edges[Dim][3];
+  for (int k = 0, e = 0; k <= Dim; ++k)
+  {
+    if (k != corner)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        edges[e][c] = corners[k][c] - apex[c];
+      }
+      ++e;
+    }
+  }
+  auto dot = [](const double* u, const double* v)
+  { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; };
+  auto cross = [](const double* u, const double* v, double* w)
+  {
+    w[0] = u[1] * v[2] - u[2] * v[1];
+    w[1] = u[2] * v[0] - u[0] * v[2];
+    w[2] = u[0] * v[1] - u[1] * v[0];
+  };
+  if (Dim == 2)
+  {
+    double w[3];
+    cross(edges[0], edges[1], w);
+    return std::atan2(std::sqrt(dot(w, w)), dot(edges[0], edges[1]));
+  }
+  // Van Oosterom and Strackee: tan(omega / 2) = |a.(b x c)| / (abc + (a.b)c + (a.c)b + (b.c)a).
+  const double* a = edges[0];
+  const double* b = edges[1 % Dim];
+  const double* c = edges[2 % Dim];
+  double bc[3];
+  cross(b, c, bc);
+  const double la = std::sqrt(dot(a, a)), lb = std::sqrt(dot(b, b)), lc = std::sqrt(dot(c, c));
+  const double numerator = std::abs(dot(a, bc));
+  const double denominator = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
+  return 2.0 * std::atan2(numerator, denominator);
+}
+
+/// The full angle around a point: 2 (two directions), 2 pi, 4 pi.
+template <int Dim>
+constexpr double FullAngle()
+{
+  return Dim == 1 ? 2.0 : Dim == 2 ? 2.0 * 3.14159265358979323846 : 4.0 * 3.14159265358979323846;
+}
+
+/// The material fractions of every point: the share of the (solid) angle around it covered by
+/// each material's cells. points: three coordinates per point; materials: per cell, an index in
+/// [0, numberOfMaterials). On the mesh boundary the angle no cell covers belongs to
+/// outsideMaterial (as the voxels beyond an image are background), or, when it is -1, the
+/// covered angle is the whole. A point no cell uses gets no fraction.
+template <int Dim, class IdType, class Executor>
+Status CornerFractions(const double* points, std::int64_t numberOfPoints,
+  const IdType* connectivity, std::int64_t numberOfCells, const std::int32_t* materials,
+  int numberOfMaterials, int outsideMaterial, MaterialFractions& fractions, Executor& executor)
+{
+  if (outsideMaterial < -1 || outsideMaterial >= numberOfMaterials)
+  {
+    return Status::Invalid("the outside material index is out of range");
+  }
+  for (std::int64_t i = 0; i < numberOfCells * (Dim + 1); ++i)
+  {
+    if (connectivity[i] < 0 || connectivity[i] >= numberOfPoints)
+    {
+      return Status::Invalid("a cell refers to a point id outside the mesh");
+    }
+  }
+  for (std::int64_t c = 0; c < numberOfCells; ++c)
+  {
+    if (materials[c] < 0 || materials[c] >= numberOfMaterials)
+    {
+      return Status::Invalid("a cell's material index is out of range");
+    }
+  }
+  std::vector<double> angles(static_cast<std::size_t>(numberOfCells * (Dim + 1)));
+  struct AngleKernel
+  {
+    using Scratch = NoScratch;
+    const double* Points;
+    const IdType* Connectivity;
+    double* Angles;
+    std::atomic<bool>* NotFinite;
+    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    {
+      for (std::int64_t cell = begin; cell < end; ++cell)
+      {
+        const double* corners[Dim + 1];
+        for (int k = 0; k <= Dim; ++k)
+        {
+          corners[k] =
+            this->Points + 3 * static_cast<std::int64_t>(this->Connectivity[cell * (Dim + 1) + k]);
+        }
+        for (int k = 0; k <= Dim; ++k)
+        {
+          const double angle = CornerAngle<Dim>(corners, k);
+          this->Angles[cell * (Dim + 1) + k] = angle;
+          if (!std::isfinite(angle))
+          {
+            this->NotFinite->store(true, std::memory_order_relaxed);
+          }
+        }
+      }
+    }
+  };
+  std::atomic<bool> notFinite{ false };
+  AngleKernel angleKernel{ points, connectivity, angles.data(), &notFinite };
+  executor.For(0, numberOfCells, 1 << 14, angleKernel);
+  if (executor.ShouldAbort())
+  {
+    return Status::Aborted();
+  }
+  if (notFinite)
+  {
+    return Status::Invalid("a point's coordinates are not finite (NaN or infinite)");
+  }
+  executor.ReportProgress(0.3);
+  PointCells<Dim> incidence;
+  incidence.Build(connectivity, numberOfCells, numberOfPoints);
+  executor.ReportProgress(0.5);
+
+  // Each point's (material, angle) sums, counted then written, in parallel over points.
+  std::vector<std::int64_t> counts(static_cast<std::size_t>(numberOfPoints) + 1, 0);
+  struct GatherKernel
+  {
+    struct Scratch
+    {
+      std::vector<std::pair<std::int32_t, double>> Sums;
+    };
+    const PointCells<Dim>* Incidence;
+    const IdType* Connectivity;
+    const std::int32_t* Materials;
+    const double* Angles;
+    std::int32_t Outside;
+    std::int64_t* Counts;
+    MaterialFractions* Out; // null in the counting pass
+    void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
+    {
+      for (std::int64_t point = begin; point < end; ++point)
+      {
+        auto& sums = scratch.Sums;
+        sums.clear();
+        double total = 0.0;
+        for (std::int64_t i = this->Incidence->Offsets[point];
+             i < this->Incidence->Offsets[point + 1]; ++i)
+        {
+          const std::int64_t cell = this->Incidence->Cells[i];
+          int corner = 0;
+          while (static_cast<std::int64_t>(this->Connectivity[cell * (Dim + 1) + corner]) != point)
+          {
+            ++corner;
+          }
+          const double angle = this->Angles[cell * (Dim + 1) + corner];
+          total += angle;
+          auto found = std::find_if(sums.begin(), sums.end(),
+            [&](const std::pair<std::int32_t, double>& s)
+            { return s.first == this->Materials[cell]; });
+          if (found == sums.end())
+          {
+            sums.emplace_back(this->Materials[cell], angle);
+          }
+          else
+          {
+            found->second += angle;
+          }
+        }
+        // Rounding leaves a few ulps of the full angle uncovered at interior points.
+        constexpr double full = FullAngle<Dim>();
+        if (this->Outside >= 0 && !sums.empty() && full - total > 1e-9 * full)
+        {
+          auto found = std::find_if(sums.begin(), sums.end(),
+            [&](const std::pair<std::int32_t, double>& s) { return s.first == this->Outside; });
+          if (found == sums.end())
+          {
+            sums.emplace_back(this->Outside, 0.0);
+            found = sums.end() - 1;
+          }
+          found->second += full - total;
+          total = full;
+        }
+        if (!this->Out)
+        {
+          this->Counts[point + 1] = static_cast<std::int64_t>(sums.size());
+          continue;
+        }
+        std::sort(sums.begin(), sums.end());
+        std::int64_t next = this->Out->Offsets[point];
+        for (const auto& sum : sums)
+        {
+          this->Out->Materials[next] = sum.first;
+          this->Out->Values[next++] = total > 0.0 ? sum.second / total : 0.0;
+        }
+      }
+    }
+  };
+  GatherKernel countKernel{ &incidence, connectivity, materials, angles.data(), outsideMaterial,
+    counts.data(), nullptr };
+  executor.For(0, numberOfPoints, 1 << 12, countKernel);
+  if (executor.ShouldAbort())
+  {
+    return Status::Aborted();
+  }
+  for (std::int64_t p = 0; p < numberOfPoints; ++p)
+  {
+    counts[p + 1] += counts[p];
+  }
+  executor.ReportProgress(0.7);
+  fractions.Offsets = std::move(counts);
+  fractions.Materials.assign(static_cast<std::size_t>(fractions.Offsets.back()), 0);
+  fractions.Values.assign(static_cast<std::size_t>(fractions.Offsets.back()), 0.0);
+  GatherKernel writeKernel{ &incidence, connectivity, materials, angles.data(), outsideMaterial,
+    nullptr, &fractions };
+  executor.For(0, numberOfPoints, 1 << 12, writeKernel);
+  executor.ReportProgress(1.0);
+  return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
+}
+
+struct MultiMaterialCutOptions
+{
+  /// g_k within this of 0 is a tie (a zero vertex of step k).
+  double ZeroTolerance = 1e-9;
+};
+
+/// Counts of one run.
+struct MultiMaterialCutCounts
+{
+  std::int64_t Steps = 0;              // steps that visited at least one cell
+  std::int64_t VisitedCells = 0;       // cell visits over all steps
+  std::int64_t SplitCells = 0;         // cells split, over all steps
+  std::int64_t SplitAssignedCells = 0; // of those, cells already assigned (triple lines)
+  std::int64_t AddedPoints = 0;
+};
+
+/// Cuts a simplicial mesh (Dim + 1 point ids per cell) into the regions of K materials.
+/// Usage: Run, then read the points' parents, the cells, their materials and parents.
+template <int Dim>
+class MultiMaterialCut
+{
+public:
+  using Cut = MarchingSimplices<Dim>;
+  static constexpr std::int32_t Remaining = -1;
+
+  /// materials: per input cell, its material index in [0, K) (ties follow it); fractions: per
+  /// input point (see CornerFractions). The peeling order is the index order.
+  template <class IdType, class Executor>
+  Status Run(std::int64_t numberOfPoints, const IdType* connectivity, std::int64_t numberOfCells,
+    const std::int32_t* materials, int numberOfMaterials, MaterialFractions fractions,
+    const MultiMaterialCutOptions& options, Executor& executor);
+
+  std::int64_t GetNumberOfInputPoints() const { return this->NumberOfInputPoints; }
+  std::int64_t GetNumberOfPoints() const { return this->Fractions.GetNumberOfPoints(); }
+  /// The edge each added point lies on, in point order: ids A and B (both smaller than the
+  /// point's own id, so points can be placed in order), the point at (1 - T) x_A + T x_B.
+  const std::vector<CutEdge>& GetAddedPoints() const { return this->AddedPoints; }
+  std::int64_t GetNumberOfCells() const
+  {
+    return static_cast<std::int64_t>(this->CellMaterials.size());
+  }
+  const std::vector<std::int64_t>& GetCells() const { return this->Cells; }
+  /// Per output cell: its material index, and the input cell it lies in.
+  const std::vector<std::int32_t>& GetCellMaterials() const { return this->CellMaterials; }
+  const std::vector<std::int64_t>& GetCellParents() const { return this->CellParents; }
+  /// The fractions of every output point (input points first).
+  const MaterialFractions& GetFractions() const { return this->Fractions; }
+  const MultiMaterialCutCounts& GetCounts() const { return this->Counts; }
+
+private:
+  /// Forwards For and ShouldAbort; the steps report their own progress.
+  template <class Executor>
+  struct QuietExecutor
+  {
+    Executor* Outer;
+    template <class Kernel>
+    void For(std::int64_t begin, std::int64_t end, std::int64_t grain, Kernel& kernel)
+    {
+      this->Outer->For(begin, end, grain, kernel);
+    }
+    bool ShouldAbort() { return this->Outer->ShouldAbort(); }
+    void ReportProgress(double) {}
+  };
+
+  double StepValue(std::int64_t point, std::int32_t step) const
+  {
+    if (this->RemainingIncidence[point] == 0)
+    {
+      return 0.0;
+    }
+    double own = 0.0, others = 0.0;
+    for (std::int64_t e = this->Fractions.Offsets[point]; e < this->Fractions.Offsets[point + 1];
+         ++e)
+    {
+      const std::int32_t material = this->Fractions.Materials[e];
+      if (material == step)
+      {
+        own = this->Fractions.Values[e];
+      }
+      else if (material > step)
+      {
+        others = std::max(others, this->Fractions.Values[e]);
+      }
+    }
+    return others - own;
+  }
+
+  /// The materials with a step after `step` carried by the points of a cell, each once,
+  /// ascending (the last material has no step).
+  void LaterMaterials(
+    const std::int64_t* ids, std::int32_t step, std::vector<std::int32_t>& out) const
+  {
+    out.clear();
+    for (int v = 0; v <= Dim; ++v)
+    {
+      for (std::int64_t e = this->Fractions.Offsets[ids[v]];
+           e < this->Fractions.Offsets[ids[v] + 1]; ++e)
+      {
+        if (this->Fractions.Materials[e] > step &&
+          this->Fractions.Materials[e] + 1 < this->NumberOfMaterials)
+        {
+          out.push_back(this->Fractions.Materials[e]);
+        }
+      }
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  }
+
+  void AdjustIncidence(const std::int64_t* ids, int change)
+  {
+    for (int v = 0; v <= Dim; ++v)
+    {
+      this->RemainingIncidence[ids[v]] += change;
+    }
+  }
+
+  template <class Executor>
+  Status Step(std::int32_t step, Executor& executor);
+
+  std::int64_t NumberOfInputPoints = 0;
+  std::int32_t NumberOfMaterials = 0;
+  const std::int32_t* InputMaterials = nullptr; // during Run
+  double Tolerance = 0.0;
+  MaterialFractions Fractions;
+  std::vector<CutEdge> AddedPoints;
+  std::vector<std::int64_t> Cells;
+  std::vector<std::int32_t> CellMaterials;
+  std::vector<std::int64_t> CellParents;
+  std::vector<std::int32_t> RemainingIncidence;  // per point: remaining cells that use it
+  std::vector<std::vector<std::int64_t>> Visits; // per material index: the cells of its step
+  std::vector<std::int64_t> LocalIds;            // per point: id in the current step, or -1
+  MultiMaterialCutCounts Counts;
+};
+
+template <int Dim>
+template <class IdType, class Executor>
+Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const IdType* connectivity,
+  std::int64_t numberOfCells, const std::int32_t* materials, int numberOfMaterials,
+  MaterialFractions fractions, const MultiMaterialCutOptions& options, Executor& executor)
+{
+  if (!(options.ZeroTolerance >= 0.0) || !std::isfinite(options.ZeroTolerance) ||
+    options.ZeroTolerance >= 0.5)
+  {
+    return Status::Invalid("the zero tolerance must be in [0, 0.5)");
+  }
+  if (numberOfMaterials < 1)
+  {
+    return Status::Invalid("there must be at least one material");
+  }
+  if (fractions.GetNumberOfPoints() != numberOfPoints ||
+    fractions.Materials.size() != fractions.Values.size() ||
+    fractions.Offsets.back() != static_cast<std::int64_t>(fractions.Materials.size()))
+  {
+    return Status::Invalid("the material fractions do not match the points");
+  }
+  for (std::int64_t c = 0; c < numberOfCells; ++c)
+  {
+    if (materials[c] < 0 || materials[c] >= numberOfMaterials)
+    {
+      return Status::Invalid("a cell's material index is out of range");
+    }
+  }
+  for (std::size_t e = 0; e < fractions.Materials.size(); ++e)
+  {
+    if (fractions.Materials[e] < 0 || fractions.Materials[e] >= numberOfMaterials ||
+      !std::isfinite(fractions.Values[e]))
+    {
+      return Status::Invalid("a material fraction has a material index out of range or is not "
+                             "finite");
+    }
+  }
+  this->Tolerance = options.ZeroTolerance;
+  this->NumberOfMaterials = numberOfMaterials;
+  this->NumberOfInputPoints = numberOfPoints;
+  this->InputMaterials = materials;
+  this->Fractions = std::move(fractions);
+  this->AddedPoints.clear();
+  this->Counts = MultiMaterialCutCounts();
+  this->Cells.resize(static_cast<std::size_t>(numberOfCells * (Dim + 1)));
+  for (std::int64_t i = 0; i < numberOfCells * (Dim + 1); ++i)
+  {
+    if (connectivity[i] < 0 || connectivity[i] >= numberOfPoints)
+    {
+      return Status::Invalid("a cell refers to a point id outside the mesh");
+    }
+    this->Cells[i] = static_cast<std::int64_t>(connectivity[i]);
+  }
+  this->CellMaterials.assign(static_cast<std::size_t>(numberOfCells), Remaining);
+  this->CellParents.resize(static_cast<std::size_t>(numberOfCells));
+  this->RemainingIncidence.assign(static_cast<std::size_t>(numberOfPoints), 0);
+  this->LocalIds.assign(static_cast<std::size_t>(numberOfPoints), -1);
+  this->Visits.assign(static_cast<std::size_t>(numberOfMaterials), {});
+  std::vector<std::int32_t> later;
+  for (std::int64_t cell = 0; cell < numberOfCells; ++cell)
+  {
+    this->CellParents[cell] = cell;
+    const std::int64_t* ids = this->Cells.data() + cell * (Dim + 1);
+    this->AdjustIncidence(ids, 1);
+    this->LaterMaterials(ids, -1, later);
+    for (const std::int32_t material : later)
+    {
+      this->Visits[material].push_back(cell);
+    }
+  }
+  for (std::int32_t step = 0; step + 1 < numberOfMaterials; ++step)
+  {
+    if (executor.ShouldAbort())
+    {
+      return Status::Aborted();
+    }
+    Status status = this->Step(step, executor);
+    if (!status.IsOk())
+    {
+      return status;
+    }
+    std::vector<std::int64_t>().swap(this->Visits[step]);
+    executor.ReportProgress(static_cast<double>(step + 1) / numberOfMaterials);
+  }
+  for (std::int32_t& material : this->CellMaterials)
+  {
+    material = material == Remaining ? numberOfMaterials - 1 : material;
+  }
+  std::vector<std::int32_t>().swap(this->RemainingIncidence);
+  std::vector<std::int64_t>().swap(this->LocalIds);
+  this->InputMaterials = nullptr;
+  return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
+}
+
+template <int Dim>
+template <class Executor>
+Status MultiMaterialCut<Dim>::Step(std::int32_t step, Executor& executor)
+{
+  const std::vector<std::int64_t>& cells = this->Visits[step];
+  if (cells.empty())
+  {
+    return Status::Ok();
+  }
+  ++this->Counts.Steps;
+  this->Counts.VisitedCells += static_cast<std::int64_t>(cells.size());
+  const auto count = static_cast<std::int64_t>(cells.size());
+
+  // The step's points, numbered in order of first use, and the cells in those numbers.
+  std::vector<std::int64_t> points;
+  std::vector<std::int64_t> local(static_cast<std::size_t>(count * (Dim + 1)));
+  for (std::int64_t c = 0; c < count; ++c)
+  {
+    const std::int64_t* ids = this->Cells.data() + cells[c] * (Dim + 1);
+    for (int v = 0; v <= Dim; ++v)
+    {
+      std::int64_t& id = this->LocalIds[ids[v]];
+      if (id < 0)
+      {
+        id = static_cast<std::int64_t>(points.size());
+        points.push_back(ids[v]);
+      }
+      local[c * (Dim + 1) + v] = id;
+    }
+  }
+  for (const std::int64_t point : points)
+  {
+    this->LocalIds[point] = -1;
+  }
+  std::vector<double> values(points.size());
+  for (std::size_t p = 0; p < points.size(); ++p)
+  {
+    values[p] = this->StepValue(points[p], step);
+  }
+  auto allZeroSide = [&](std::int64_t c)
+  {
+    const std::int32_t original = this->InputMaterials[this->CellParents[cells[c]]];
+    if (original == step)
+    {
+      return CutSide::Inside;
+    }
+    const std::int64_t* ids = this->Cells.data() + cells[c] * (Dim + 1);
+    for (int v = 0; v <= Dim && original < step; ++v)
+    {
+      if (this->Fractions.Of(ids[v], step) > 0.0)
+      {
+        return CutSide::Inside;
+      }
+    }
+    return CutSide::Outside;
+  };
+  MarchingSimplicesOptions cutOptions;
+  cutOptions.ZeroTolerance = this->Tolerance;
+  QuietExecutor<Executor> quiet{ &executor };
+  Cut cut;
+  Status status = cut.Classify(values.data(), static_cast<std::int64_t>(points.size()),
+    local.data(), count, cutOptions, allZeroSide, quiet);
+  if (!status.IsOk())
+  {
+    return status;
+  }
+  const std::int64_t pieces = cut.GetNumberOfCells();
+  std::vector<std::int64_t> pieceIds(static_cast<std::size_t>(pieces * (Dim + 1)));
+  std::vector<std::int64_t> parents(static_cast<std::size_t>(pieces));
+  std::vector<std::uint8_t> sides(static_cast<std::size_t>(pieces));
+  status = cut.WriteCells(local.data(), pieceIds.data(), parents.data(), sides.data(), quiet);
+  if (!status.IsOk())
+  {
+    return status;
+  }
+
+  // The cut points: appended with interpolated fractions.
+  const std::int64_t firstAdded = this->GetNumberOfPoints();
+  for (const CutEdge& edge : cut.GetCutEdges())
+  {
+    const std::int64_t a = points[edge.A], b = points[edge.B];
+    this->Fractions.AppendInterpolated(a, b, edge.T);
+    this->AddedPoints.push_back(CutEdge{ a, b, edge.T });
+  }
+  const auto added = static_cast<std::int64_t>(cut.GetCutEdges().size());
+  this->Counts.AddedPoints += added;
+  this->RemainingIncidence.resize(static_cast<std::size_t>(firstAdded + added), 0);
+  this->LocalIds.resize(static_cast<std::size_t>(firstAdded + added), -1);
+  auto global = [&](std::int64_t id)
+  {
+    return id < static_cast<std::int64_t>(points.size())
+      ? points[id]
+      : firstAdded + id - static_cast<std::int64_t>(points.size());
+  };
+
+  // Each parent's first piece takes its slot, the others are appended and visited by the later
+  // steps of the materials its parent carries.
+  std::vector<std::int32_t> later;
+  std::int64_t ids[Dim + 1];
+  for (std::int64_t first = 0; first < pieces;)
+  {
+    std::int64_t last = first + 1;
+    while (last < pieces && parents[last] == parents[first])
+    {
+      ++last;
+    }
+    const std::int64_t slot = cells[parents[first]];
+    std::int64_t* slotIds = this->Cells.data() + slot * (Dim + 1);
+    const std::int32_t before = this->CellMaterials[slot];
+    if (last - first > 1)
+    {
+      ++this->Counts.SplitCells;
+      this->Counts.SplitAssignedCells += before == Remaining ? 0 : 1;
+      this->LaterMaterials(slotIds, step, later);
+    }
+    if (before == Remaining)
+    {
+      this->AdjustIncidence(slotIds, -1);
+    }
+    const std::int64_t parent = this->CellParents[slot];
+    for (std::int64_t piece = first; piece < last; ++piece)
+    {
+      for (int v = 0; v <= Dim; ++v)
+      {
+        ids[v] = global(pieceIds[piece * (Dim + 1) + v]);
+      }
+      const std::int32_t material = before != Remaining         ? before
+        : static_cast<CutSide>(sides[piece]) == CutSide::Inside ? step
+                                                                : Remaining;
+      std::int64_t cell = slot;
+      if (piece != first)
+      {
+        cell = this->GetNumberOfCells();
+        this->Cells.insert(this->Cells.end(), ids, ids + Dim + 1);
+        this->CellMaterials.push_back(material);
+        this->CellParents.push_back(parent);
+        for (const std::int32_t visitor : later)
+        {
+          this->Visits[visitor].push_back(cell);
+        }
+      }
+      else
+      {
+        // slotIds may have moved with the appends of earlier parents; write through the index.
+        std::copy(ids, ids + Dim + 1, this->Cells.data() + slot * (Dim + 1));
+        this->CellMaterials[slot] = material;
+      }
+      if (material == Remaining)
+      {
+        this->AdjustIncidence(this->Cells.data() + cell * (Dim + 1), 1);
+      }
+    }
+    first = last;
+  }
+  return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
+}
+
+} // namespace stm
+
+#endif

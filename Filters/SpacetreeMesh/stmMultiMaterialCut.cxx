@@ -1,0 +1,298 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "stmMultiMaterialCut.h"
+
+#include "stmCutInput.h"
+#include "stmSMPExecutor.h"
+
+#include "Cut/MultiMaterialCut.h"
+
+#include "vtkCellArray.h"
+#include "vtkCellData.h"
+#include "vtkDataArray.h"
+#include "vtkDoubleArray.h"
+#include "vtkIdList.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkIntArray.h"
+#include "vtkNew.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
+#include "vtkSMPTools.h"
+#include "vtkTypeInt32Array.h"
+#include "vtkTypeInt64Array.h"
+#include "vtkUnstructuredGrid.h"
+
+#include <algorithm>
+#include <limits>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+vtkStandardNewMacro(stmMultiMaterialCut);
+
+namespace
+{
+/// The materials in peeling order: the labels ascending, the background last.
+std::vector<std::int64_t> PeelingOrder(std::vector<std::int64_t> labels, std::int64_t background)
+{
+  labels.push_back(background);
+  std::sort(labels.begin(), labels.end());
+  labels.erase(std::unique(labels.begin(), labels.end()), labels.end());
+  labels.erase(std::find(labels.begin(), labels.end(), background));
+  labels.push_back(background);
+  return labels;
+}
+
+template <class OutId>
+vtkSmartPointer<vtkCellArray> SimplexCells(const std::vector<std::int64_t>& ids, int corners)
+{
+  using Storage =
+    typename std::conditional<sizeof(OutId) == 4, vtkTypeInt32Array, vtkTypeInt64Array>::type;
+  const auto cells = static_cast<vtkIdType>(ids.size()) / corners;
+  vtkNew<Storage> offsets, connectivity;
+  offsets->SetNumberOfValues(cells + 1);
+  connectivity->SetNumberOfValues(static_cast<vtkIdType>(ids.size()));
+  auto* offsetValues = offsets->GetPointer(0);
+  auto* idValues = connectivity->GetPointer(0);
+  vtkSMPTools::For(0, cells + 1,
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      for (vtkIdType c = begin; c < end; ++c)
+      {
+        offsetValues[c] = static_cast<typename Storage::ValueType>(c * corners);
+        for (int k = 0; k < corners && c < cells; ++k)
+        {
+          idValues[c * corners + k] =
+            static_cast<typename Storage::ValueType>(ids[c * corners + k]);
+        }
+      }
+    });
+  vtkNew<vtkCellArray> cellArray;
+  cellArray->SetData(offsets, connectivity);
+  return cellArray;
+}
+
+struct CutResult
+{
+  int Materials = 0;
+  vtkIdType SplitCells = 0;
+  vtkIdType SplitAssignedCells = 0;
+  vtkIdType CutPoints = 0;
+};
+
+template <int Dim, class IdType>
+stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const IdType* connectivity,
+  const std::vector<std::int64_t>& labels, const std::vector<std::int64_t>& order,
+  double zeroTolerance, vtkUnstructuredGrid* output, CutResult& result)
+{
+  const vtkIdType numberOfPoints = input->GetNumberOfPoints();
+  const vtkIdType numberOfCells = input->GetNumberOfCells();
+  std::vector<std::int32_t> materials(static_cast<std::size_t>(numberOfCells));
+  vtkSMPTools::For(0, numberOfCells,
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      for (vtkIdType c = begin; c < end; ++c)
+      {
+        materials[c] = static_cast<std::int32_t>(
+          std::lower_bound(order.begin(), order.end() - 1, labels[c]) - order.begin());
+        materials[c] = order[materials[c]] == labels[c]
+          ? materials[c]
+          : static_cast<std::int32_t>(order.size()) - 1;
+      }
+    });
+  std::vector<double> xyz(static_cast<std::size_t>(3 * numberOfPoints));
+  vtkPoints* inputPoints = input->GetPoints();
+  vtkSMPTools::For(0, numberOfPoints,
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      for (vtkIdType p = begin; p < end; ++p)
+      {
+        inputPoints->GetPoint(p, xyz.data() + 3 * p);
+      }
+    });
+
+  stmSMPExecutor executor(filter);
+  executor.SetProgressRange(0.02, 0.15);
+  const int count = static_cast<int>(order.size());
+  stm::MaterialFractions fractions;
+  stm::Status status = stm::CornerFractions<Dim>(xyz.data(), numberOfPoints, connectivity,
+    numberOfCells, materials.data(), count, count - 1, fractions, executor);
+  if (!status.IsOk())
+  {
+    return status;
+  }
+  executor.SetProgressRange(0.15, 0.85);
+  stm::MultiMaterialCut<Dim> cut;
+  stm::MultiMaterialCutOptions options;
+  options.ZeroTolerance = zeroTolerance;
+  status = cut.Run(numberOfPoints, connectivity, numberOfCells, materials.data(), count,
+    std::move(fractions), options, executor);
+  if (!status.IsOk())
+  {
+    return status;
+  }
+  std::vector<std::int32_t>().swap(materials);
+  result.Materials = count;
+  result.SplitCells = cut.GetCounts().SplitCells;
+  result.SplitAssignedCells = cut.GetCounts().SplitAssignedCells;
+  result.CutPoints = cut.GetCounts().AddedPoints;
+
+  // Points: the input's, then each added point on its edge, in order (an edge's ends come
+  // first), with the point data interpolated the same way.
+  const std::vector<stm::CutEdge>& added = cut.GetAddedPoints();
+  const vtkIdType total = numberOfPoints + static_cast<vtkIdType>(added.size());
+  xyz.resize(static_cast<std::size_t>(3 * total));
+  for (vtkIdType p = numberOfPoints; p < total; ++p)
+  {
+    const stm::CutEdge& edge = added[p - numberOfPoints];
+    for (int c = 0; c < 3; ++c)
+    {
+      xyz[3 * p + c] = (1.0 - edge.T) * xyz[3 * edge.A + c] + edge.T * xyz[3 * edge.B + c];
+    }
+  }
+  vtkNew<vtkDoubleArray> coordinates;
+  coordinates->SetNumberOfComponents(3);
+  coordinates->SetNumberOfTuples(total);
+  std::copy(xyz.begin(), xyz.end(), coordinates->GetPointer(0));
+  std::vector<double>().swap(xyz);
+  vtkNew<vtkPoints> points;
+  points->SetData(coordinates);
+  output->SetPoints(points);
+  vtkPointData* inPD = input->GetPointData();
+  vtkPointData* outPD = output->GetPointData();
+  outPD->InterpolateAllocate(inPD, total);
+  for (vtkIdType p = 0; p < numberOfPoints; ++p)
+  {
+    outPD->CopyData(inPD, p, p);
+  }
+  for (vtkIdType p = numberOfPoints; p < total; ++p)
+  {
+    const stm::CutEdge& edge = added[p - numberOfPoints];
+    outPD->InterpolateEdge(outPD, p, edge.A, edge.B, edge.T);
+  }
+  filter->UpdateProgress(0.92);
+
+  const std::vector<std::int64_t>& cellIds = cut.GetCells();
+  const vtkIdType cells = cut.GetNumberOfCells();
+  const bool fits32 = total < std::numeric_limits<std::int32_t>::max() &&
+    cells * (Dim + 1) < std::numeric_limits<std::int32_t>::max();
+  output->SetCells(Dim == 3 ? VTK_TETRA : VTK_TRIANGLE,
+    fits32 ? SimplexCells<std::int32_t>(cellIds, Dim + 1)
+           : SimplexCells<std::int64_t>(cellIds, Dim + 1));
+
+  vtkCellData* inCD = input->GetCellData();
+  vtkCellData* outCD = output->GetCellData();
+  outCD->CopyAllocate(inCD, cells);
+  vtkNew<vtkIdList> parentIds;
+  parentIds->SetNumberOfIds(cells);
+  std::copy(cut.GetCellParents().begin(), cut.GetCellParents().end(), parentIds->GetPointer(0));
+  vtkNew<vtkIdList> places;
+  places->SetNumberOfIds(cells);
+  for (vtkIdType c = 0; c < cells; ++c)
+  {
+    places->SetId(c, c);
+  }
+  outCD->CopyData(inCD, parentIds, places);
+  if (vtkAbstractArray* original = outCD->GetAbstractArray("Material"))
+  {
+    original->SetName("OriginalMaterial");
+  }
+  vtkNew<vtkIntArray> material;
+  material->SetName("Material");
+  material->SetNumberOfValues(cells);
+  const std::vector<std::int32_t>& indices = cut.GetCellMaterials();
+  vtkSMPTools::For(0, cells,
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      for (vtkIdType c = begin; c < end; ++c)
+      {
+        material->SetValue(c, static_cast<int>(order[indices[c]]));
+      }
+    });
+  outCD->AddArray(material);
+  outCD->SetActiveScalars("Material");
+  return stm::Status::Ok();
+}
+} // namespace
+
+void stmMultiMaterialCut::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "BackgroundMaterial: " << this->BackgroundMaterial << "\n";
+  os << indent << "ZeroTolerance: " << this->ZeroTolerance << "\n";
+  os << indent << "NumberOfMaterials: " << this->NumberOfMaterials << "\n";
+  os << indent << "NumberOfSplitCells: " << this->NumberOfSplitCells << "\n";
+  os << indent << "NumberOfSplitAssignedCells: " << this->NumberOfSplitAssignedCells << "\n";
+  os << indent << "NumberOfCutPoints: " << this->NumberOfCutPoints << "\n";
+}
+
+int stmMultiMaterialCut::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0], 0);
+  vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
+  this->NumberOfMaterials = 0;
+  this->NumberOfSplitCells = 0;
+  this->NumberOfSplitAssignedCells = 0;
+  this->NumberOfCutPoints = 0;
+  output->Initialize();
+  auto fail = [&](const std::string& message)
+  {
+    output->Initialize();
+    vtkErrorMacro(<< "MultiMaterialCut failed: " << message);
+    return 0;
+  };
+  std::string problem;
+  const int dimension =
+    stmCutInput::Preflight(inputVector[0], input, stmCutInput::TessellateSimplicialFirst, problem);
+  if (dimension < 0)
+  {
+    return 1; // an upstream filter was aborted: an empty output, quietly
+  }
+  if (dimension == 0)
+  {
+    return fail(problem);
+  }
+  vtkDataArray* materialArray = input->GetCellData()->GetArray("Material");
+  if (!materialArray)
+  {
+    return fail("the input has no cell array Material; tessellate a label image (Spacetree "
+                "Tessellate) or add the materials as the integer cell array Material");
+  }
+  if (materialArray->GetNumberOfComponents() != 1)
+  {
+    return fail("the cell array Material must have one component, it has " +
+      std::to_string(materialArray->GetNumberOfComponents()));
+  }
+  const std::vector<std::int64_t> labels = stmCutInput::CellMaterials(input);
+  const std::vector<std::int64_t> order = PeelingOrder(labels, this->BackgroundMaterial);
+  if (order.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
+  {
+    return fail("too many materials");
+  }
+  this->UpdateProgress(0.02);
+
+  CutResult result;
+  const stm::Status status = stmCutInput::DispatchSimplices(input->GetCells(), dimension,
+    [&](auto dim, const auto* ids)
+    {
+      return Cut<decltype(dim)::value>(
+        this, input, ids, labels, order, this->ZeroTolerance, output, result);
+    });
+  if (!status.IsOk())
+  {
+    output->Initialize();
+    if (this->GetAbortExecute() || status.GetCode() == stm::Status::Code::Aborted)
+    {
+      return 1;
+    }
+    return fail(status.GetMessage());
+  }
+  this->NumberOfMaterials = result.Materials;
+  this->NumberOfSplitCells = result.SplitCells;
+  this->NumberOfSplitAssignedCells = result.SplitAssignedCells;
+  this->NumberOfCutPoints = result.CutPoints;
+  this->UpdateProgress(1.0);
+  return 1;
+}
