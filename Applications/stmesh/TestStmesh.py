@@ -19,6 +19,7 @@ import json
 import math
 import os
 import random
+import re
 import shutil
 import subprocess
 import sys
@@ -2556,8 +2557,11 @@ def case_materials_separate(c):
           "stages %s" % [entry["name"] for entry in summary["stages"]])
     check(summary["parameters"]["materials"] == "separate",
           "parameters.materials %s" % summary["parameters"]["materials"])
-    check(stage(summary, "snap")["skipped"] and "skipped (--materials separate)" in out,
-          "the snap stage was not skipped")
+    check(stage(summary, "snap")["skipped"] and "in the cut stage (--materials separate)" in out,
+          "the snap stage is not shown as done by the cut")
+    check(re.search(r"117 materials, [1-9][0-9]* snaps", out) is None and
+          re.search(r"3 materials, [1-9][0-9]* snaps", out) is not None,
+          "the cut stage does not show its snaps")
     mesh = read_cut(output)
     check(set(mesh["materials"]) == {0, 1, 3}, "Material values %s" % sorted(set(mesh["materials"])))
     check(min(mesh["measures"]) > 0, "a cell has measure %r" % min(mesh["measures"]))
@@ -2617,6 +2621,12 @@ def case_materials_separate(c):
     _, err = c.run_ok([boxes, "-o", c.path("w2.vtu"), "--materials", "separate", "--snap",
                        "threshold", "--stop-after", "cut"])
     check("--snap is ignored with --materials separate" in err, "no warning for --snap")
+    # --snap none: no snapping in the cut stage.
+    output, summary_path = c.path("plain.vtu"), c.path("plain.json")
+    out, _ = c.run_ok([boxes, "-o", output, "--summary", summary_path, "--materials", "separate",
+                       "--snap", "none", "--stop-after", "cut"])
+    check("skipped (--snap none)" in out and re.search(r"materials, [0-9]+ snaps", out) is None,
+          "--snap none: the cut stage snapped")
 
 
 def case_error_merge_values(c):

@@ -175,9 +175,10 @@ Arguments:
   --materials M         what the cut stage makes of the body's labels: merged (the default:
                         one body, the binary cut) or separate (every label its own material,
                         cut at the interfaces between them with conforming triple lines and
-                        quadruple points; needs --separating labels; no snap stage yet, and
-                        --output-mode surface, --keep and --iso do not apply: --interfaces
-                        writes the interfaces).
+                        quadruple points; needs --separating labels; the cut stage snaps by
+                        the quality rule before each material unless --snap none; --output-mode
+                        surface, --keep and --iso do not apply: --interfaces writes the
+                        interfaces).
   --merge S1,S2,...:T   merge labels before meshing: the voxels of the source labels S1, S2, ...
                         get label T (a new label, one of the sources, or a label the image
                         already holds). Repeat the option for several groups, as in
@@ -3588,10 +3589,11 @@ void WarnAboutIgnoredCutOptions(const Options& options)
       Diagnostics() << "stmesh: warning: " << name << " applies to the snap stage only; ignored "
                     << ignoredWith << '\n';
     }
-    else if (options.SeparateMaterials)
+    else if (options.SeparateMaterials && options.SnapRule != NoSnap)
     {
       Diagnostics() << "stmesh: warning: " << name
-                    << " is ignored with --materials separate, which has no snap stage yet\n";
+                    << " is ignored with --materials separate, which snaps by the quality rule "
+                       "in its cut stage (--snap none turns snapping off)\n";
     }
     else if (name == "--alpha" && options.SnapRule != stmVertexSnap::THRESHOLD)
     {
@@ -3734,12 +3736,14 @@ vtkSmartPointer<vtkUnstructuredGrid> WithLabelsAsMaterial(vtkUnstructuredGrid* g
 }
 
 /// The cut stage of --materials separate: stmMultiMaterialCut, every label its own material,
-/// the background (0) peeled last. The inside cells are those of the body's labels.
+/// the background (0) peeled last, snapping before each material unless --snap none. The
+/// inside cells are those of the body's labels.
 vtkSmartPointer<vtkPointSet> RunMultiMaterialCut(
-  vtkSmartPointer<vtkUnstructuredGrid> grid, StageReport& report)
+  vtkSmartPointer<vtkUnstructuredGrid> grid, const Options& options, StageReport& report)
 {
   vtkNew<stmMultiMaterialCut> cut;
   cut->SetBackgroundMaterial(0);
+  cut->SetVertexSnapping(options.SnapRule != NoSnap);
   vtkSmartPointer<vtkPointSet> mesh =
     RunFilter(cut, grid, "cutting the mesh at the material interfaces", report);
   grid = nullptr;
@@ -3758,6 +3762,10 @@ vtkSmartPointer<vtkPointSet> RunMultiMaterialCut(
   std::ostringstream description;
   description << report.Cells << " cells, " << report.Points << " points, "
               << cut->GetNumberOfMaterials() << " materials";
+  if (cut->GetVertexSnapping())
+  {
+    description << ", " << cut->GetNumberOfSnappedPoints() << " snaps";
+  }
   report.Description = description.str();
   return mesh;
 }
@@ -3769,7 +3777,7 @@ vtkSmartPointer<vtkPointSet> RunCut(
 {
   if (options.SeparateMaterials)
   {
-    return RunMultiMaterialCut(std::move(grid), report);
+    return RunMultiMaterialCut(std::move(grid), options, report);
   }
   const bool smoothingFollows = options.Smooths();
   const int outputMode = smoothingFollows ? stmMarchingSimplices::VOLUME : options.OutputMode;
@@ -4808,8 +4816,9 @@ int Run(const Options& options)
     if (!options.Snaps())
     {
       snapReport.Skipped = true;
-      snapReport.Description =
-        options.SeparateMaterials ? "skipped (--materials separate)" : "skipped (--snap none)";
+      snapReport.Description = options.SeparateMaterials && options.SnapRule != NoSnap
+        ? "in the cut stage (--materials separate)"
+        : "skipped (--snap none)";
     }
     else
     {

@@ -55,8 +55,8 @@ void InstantiatePipeline()
   std::vector<std::int64_t> facets, parents;
   cutter.ExtractSurface(static_cast<const std::int64_t*>(nullptr), facets, parents, executor);
   MultiMaterialCut<Dim> materials;
-  materials.Run(0, static_cast<const std::int64_t*>(nullptr), 0, nullptr, 1, MaterialFractions(),
-    MultiMaterialCutOptions(), executor);
+  materials.Run(0, nullptr, static_cast<const std::int64_t*>(nullptr), 0, nullptr, 1,
+    MaterialFractions(), MultiMaterialCutOptions(), executor);
   if constexpr (Dim <= 3)
   {
     MaterialFractions fractions;

@@ -2,6 +2,7 @@
 #include "stmMultiMaterialCut.h"
 
 #include "stmCutInput.h"
+#include "stmPlaneFrame.h"
 #include "stmSMPExecutor.h"
 
 #include "Cut/MultiMaterialCut.h"
@@ -79,12 +80,14 @@ struct CutResult
   vtkIdType SplitCells = 0;
   vtkIdType SplitAssignedCells = 0;
   vtkIdType CutPoints = 0;
+  vtkIdType SnappedPoints = 0;
 };
 
 template <int Dim, class IdType>
 stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const IdType* connectivity,
   const std::vector<std::int64_t>& labels, const std::vector<std::int64_t>& order,
-  double zeroTolerance, vtkUnstructuredGrid* output, CutResult& result)
+  const stmPlaneFrame& frame, const stm::MultiMaterialCutOptions& options,
+  vtkUnstructuredGrid* output, CutResult& result)
 {
   const vtkIdType numberOfPoints = input->GetNumberOfPoints();
   const vtkIdType numberOfCells = input->GetNumberOfCells();
@@ -123,11 +126,15 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
     return status;
   }
   executor.SetProgressRange(0.15, 0.85);
+  std::vector<double> core;
+  if (options.SnapVertices)
+  {
+    core = frame.CoreCoordinates<Dim>(inputPoints);
+  }
   stm::MultiMaterialCut<Dim> cut;
-  stm::MultiMaterialCutOptions options;
-  options.ZeroTolerance = zeroTolerance;
-  status = cut.Run(numberOfPoints, connectivity, numberOfCells, materials.data(), count,
-    std::move(fractions), options, executor);
+  status = cut.Run(numberOfPoints, core.empty() ? nullptr : core.data(), connectivity,
+    numberOfCells, materials.data(), count, std::move(fractions), options, executor);
+  std::vector<double>().swap(core);
   if (!status.IsOk())
   {
     return status;
@@ -137,6 +144,7 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
   result.SplitCells = cut.GetCounts().SplitCells;
   result.SplitAssignedCells = cut.GetCounts().SplitAssignedCells;
   result.CutPoints = cut.GetCounts().AddedPoints;
+  result.SnappedPoints = cut.GetCounts().SnappedPoints;
 
   // Points: the input's, then each added point on its edge, in order (an edge's ends come
   // first), with the point data interpolated the same way.
@@ -150,6 +158,20 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
     {
       xyz[3 * p + c] = (1.0 - edge.T) * xyz[3 * edge.A + c] + edge.T * xyz[3 * edge.B + c];
     }
+  }
+  if (options.SnapVertices)
+  {
+    // The core's places: snapped points moved, later cut points between moved points.
+    const std::vector<double>& places = cut.GetPoints();
+    vtkSMPTools::For(0, total,
+      [&](vtkIdType begin, vtkIdType end)
+      {
+        for (vtkIdType p = begin; p < end; ++p)
+        {
+          double original[3] = { xyz[3 * p], xyz[3 * p + 1], xyz[3 * p + 2] };
+          frame.Lift<Dim>(places.data() + p * Dim, original, xyz.data() + 3 * p);
+        }
+      });
   }
   vtkNew<vtkDoubleArray> coordinates;
   coordinates->SetNumberOfComponents(3);
@@ -221,10 +243,12 @@ void stmMultiMaterialCut::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "BackgroundMaterial: " << this->BackgroundMaterial << "\n";
   os << indent << "ZeroTolerance: " << this->ZeroTolerance << "\n";
+  os << indent << "VertexSnapping: " << (this->VertexSnapping ? "On" : "Off") << "\n";
   os << indent << "NumberOfMaterials: " << this->NumberOfMaterials << "\n";
   os << indent << "NumberOfSplitCells: " << this->NumberOfSplitCells << "\n";
   os << indent << "NumberOfSplitAssignedCells: " << this->NumberOfSplitAssignedCells << "\n";
   os << indent << "NumberOfCutPoints: " << this->NumberOfCutPoints << "\n";
+  os << indent << "NumberOfSnappedPoints: " << this->NumberOfSnappedPoints << "\n";
 }
 
 int stmMultiMaterialCut::RequestData(
@@ -236,6 +260,7 @@ int stmMultiMaterialCut::RequestData(
   this->NumberOfSplitCells = 0;
   this->NumberOfSplitAssignedCells = 0;
   this->NumberOfCutPoints = 0;
+  this->NumberOfSnappedPoints = 0;
   output->Initialize();
   auto fail = [&](const std::string& message)
   {
@@ -271,6 +296,15 @@ int stmMultiMaterialCut::RequestData(
   {
     return fail("too many materials");
   }
+  stmPlaneFrame frame;
+  if (this->VertexSnapping &&
+    !frame.Build(input, dimension, "vertex snapping needs a planar triangle mesh", problem))
+  {
+    return fail(problem);
+  }
+  stm::MultiMaterialCutOptions options;
+  options.ZeroTolerance = this->ZeroTolerance;
+  options.SnapVertices = this->VertexSnapping;
   this->UpdateProgress(0.02);
 
   CutResult result;
@@ -278,7 +312,7 @@ int stmMultiMaterialCut::RequestData(
     [&](auto dim, const auto* ids)
     {
       return Cut<decltype(dim)::value>(
-        this, input, ids, labels, order, this->ZeroTolerance, output, result);
+        this, input, ids, labels, order, frame, options, output, result);
     });
   if (!status.IsOk())
   {
@@ -293,6 +327,7 @@ int stmMultiMaterialCut::RequestData(
   this->NumberOfSplitCells = result.SplitCells;
   this->NumberOfSplitAssignedCells = result.SplitAssignedCells;
   this->NumberOfCutPoints = result.CutPoints;
+  this->NumberOfSnappedPoints = result.SnappedPoints;
   this->UpdateProgress(1.0);
   return 1;
 }

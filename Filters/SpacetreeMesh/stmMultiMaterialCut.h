@@ -14,19 +14,20 @@
  * are background. A material's region is where its fraction is the largest.
  *
  * The materials are peeled in turn, the labels ascending and BackgroundMaterial last: each step
- * cuts the cells not yet assigned at the zero of (largest fraction of the materials after it)
- * - (its own fraction) with the binary marching simplices, and assigns the negative pieces. A
+ * snaps the points next to its interface onto it (VertexSnapping), cuts the cells not yet
+ * assigned at the zero of (largest fraction of the materials after it) - (its own fraction)
+ * with the binary marching simplices, and assigns the negative pieces. A
  * cut splits every cell around its edge, already assigned or not (an assigned piece keeps its
  * material), so interfaces, triple lines and quadruple points are conforming and watertight and
  * every piece has positive volume (see Filters/Core/Cut/MultiMaterialCut.h). With two materials
- * the result is exactly stmMarchingSimplices on the labels function.
+ * and VertexSnapping off the result is exactly stmMarchingSimplices on the labels function.
  *
  * Output: a vtkUnstructuredGrid of the pieces, in the order of the input cells they lie in
  * followed by the pieces added by later steps; the input points first, then the added points,
  * each on an edge of the mesh at the time it was cut (its point data interpolated along that
- * edge). The cell array "Material" is the piece's material, "OriginalMaterial" the input cell's
- * Material; other cell arrays are copied from the input cell. The result does not depend on the
- * number of threads.
+ * edge; a snapped point keeps its point data). The cell array "Material" is the piece's material,
+ * "OriginalMaterial" the input cell's Material; other cell arrays are copied from the input cell.
+ * The result does not depend on the number of threads.
  *
  * @sa stmMarchingSimplices stmSpacetreeTessellate stmBoundarySmooth stmInterfaceSurface
  */
@@ -55,6 +56,19 @@ public:
 
   ///@{
   /**
+   * Before each material is cut, move the points next to its interface onto it instead of
+   * cutting the edges close to them (stmVertexSnap's quality-driven rule: a point snaps along
+   * one of its cut edges, or its value is nudged, where that gives better cut elements).
+   * Points move only where every cell around them is one the step cuts; a moved point takes the
+   * fractions of its new place. Default on.
+   */
+  vtkSetMacro(VertexSnapping, bool);
+  vtkGetMacro(VertexSnapping, bool);
+  vtkBooleanMacro(VertexSnapping, bool);
+  ///@}
+
+  ///@{
+  /**
    * Differences of fractions within this of 0 are ties: such points lie on the interface and
    * edges to them are not cut. In [0, 0.5). Default 1e-9 (fractions of a voxel tessellation are
    * multiples of 1/2^d up to rounding, so its ties are exact).
@@ -65,13 +79,14 @@ public:
 
   /**
    * The materials of the last update; its splits of a cell, summed over the steps; of those,
-   * the splits of cells whose material was already assigned (along triple lines); and the
-   * points it added.
+   * the splits of cells whose material was already assigned (along triple lines); the points
+   * it added; and its snaps, summed over the steps.
    */
   vtkGetMacro(NumberOfMaterials, int);
   vtkGetMacro(NumberOfSplitCells, vtkIdType);
   vtkGetMacro(NumberOfSplitAssignedCells, vtkIdType);
   vtkGetMacro(NumberOfCutPoints, vtkIdType);
+  vtkGetMacro(NumberOfSnappedPoints, vtkIdType);
 
 protected:
   stmMultiMaterialCut() = default;
@@ -86,10 +101,12 @@ private:
 
   int BackgroundMaterial = 0;
   double ZeroTolerance = 1e-9;
+  bool VertexSnapping = true;
   int NumberOfMaterials = 0;
   vtkIdType NumberOfSplitCells = 0;
   vtkIdType NumberOfSplitAssignedCells = 0;
   vtkIdType NumberOfCutPoints = 0;
+  vtkIdType NumberOfSnappedPoints = 0;
 };
 
 #endif

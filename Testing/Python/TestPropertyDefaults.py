@@ -83,8 +83,9 @@ PRINTED_DEFAULTS = {
     "stmInterfaceSurface": ["IncludeOuterBoundary: On", "BackgroundMaterial: 0",
                             "OuterLabel: -1"],
     "stmMultiMaterialCut": ["BackgroundMaterial: 0", "ZeroTolerance: 1e-09",
-                            "NumberOfMaterials: 0", "NumberOfSplitCells: 0",
-                            "NumberOfSplitAssignedCells: 0", "NumberOfCutPoints: 0"],
+                            "VertexSnapping: On", "NumberOfMaterials: 0",
+                            "NumberOfSplitCells: 0", "NumberOfSplitAssignedCells: 0",
+                            "NumberOfCutPoints: 0", "NumberOfSnappedPoints: 0"],
 }
 
 problems = []

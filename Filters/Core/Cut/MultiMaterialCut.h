@@ -36,6 +36,7 @@
 #include "../Common/PointCells.h"
 #include "../Common/Status.h"
 #include "MarchingSimplices.h"
+#include "VertexSnap.h"
 
 #include <algorithm>
 #include <atomic>
@@ -48,23 +49,22 @@
 namespace stm
 {
 
-/// Sparse per-point material fractions in compressed rows, each row sorted by material index
-/// (the position in the peeling order).
+/// Sparse per-point material fractions: each point's row, [Begins[p], Ends[p]) in Materials
+/// and Values, sorted by material index (the position in the peeling order). Rows are appended;
+/// a replaced row moves to the end.
 struct MaterialFractions
 {
-  std::vector<std::int64_t> Offsets{ 0 }; // numberOfPoints + 1
+  std::vector<std::int64_t> Begins;
+  std::vector<std::int64_t> Ends;
   std::vector<std::int32_t> Materials;
   std::vector<double> Values;
 
-  std::int64_t GetNumberOfPoints() const
-  {
-    return static_cast<std::int64_t>(this->Offsets.size()) - 1;
-  }
+  std::int64_t GetNumberOfPoints() const { return static_cast<std::int64_t>(this->Begins.size()); }
 
   /// The fraction of `material` at `point` (0 when absent).
   double Of(std::int64_t point, std::int32_t material) const
   {
-    for (std::int64_t e = this->Offsets[point]; e < this->Offsets[point + 1]; ++e)
+    for (std::int64_t e = this->Begins[point]; e < this->Ends[point]; ++e)
     {
       if (this->Materials[e] == material)
       {
@@ -74,29 +74,50 @@ struct MaterialFractions
     return 0.0;
   }
 
-  /// Appends a point whose fractions are (1 - t) a + t b.
-  void AppendInterpolated(std::int64_t a, std::int64_t b, double t)
+  /// Appends a point whose fractions are (1 - t) a + t b of the rows a and b of `from` (which
+  /// may be this object).
+  void AppendInterpolated(const MaterialFractions& from, std::int64_t a, std::int64_t b, double t)
   {
-    std::int64_t i = this->Offsets[a], j = this->Offsets[b];
-    const std::int64_t iEnd = this->Offsets[a + 1], jEnd = this->Offsets[b + 1];
+    this->Begins.push_back(static_cast<std::int64_t>(this->Materials.size()));
+    this->AppendRow(from, a, b, t);
+    this->Ends.push_back(static_cast<std::int64_t>(this->Materials.size()));
+  }
+
+  /// Gives `point` the fractions of row `row` of `from` (another object), at the end.
+  void ReplaceRow(std::int64_t point, const MaterialFractions& from, std::int64_t row)
+  {
+    this->Begins[point] = static_cast<std::int64_t>(this->Materials.size());
+    this->Materials.insert(this->Materials.end(), from.Materials.begin() + from.Begins[row],
+      from.Materials.begin() + from.Ends[row]);
+    this->Values.insert(this->Values.end(), from.Values.begin() + from.Begins[row],
+      from.Values.begin() + from.Ends[row]);
+    this->Ends[point] = static_cast<std::int64_t>(this->Materials.size());
+  }
+
+private:
+  // Indices, not references: `from` may be this object, whose arrays grow meanwhile.
+  void AppendRow(const MaterialFractions& from, std::int64_t a, std::int64_t b, double t)
+  {
+    std::int64_t i = from.Begins[a], j = from.Begins[b];
+    const std::int64_t iEnd = from.Ends[a], jEnd = from.Ends[b];
     while (i < iEnd || j < jEnd)
     {
       std::int32_t material;
       double value = 0.0;
-      if (j >= jEnd || (i < iEnd && this->Materials[i] < this->Materials[j]))
+      if (j >= jEnd || (i < iEnd && from.Materials[i] < from.Materials[j]))
       {
-        material = this->Materials[i];
-        value = (1.0 - t) * this->Values[i++];
+        material = from.Materials[i];
+        value = (1.0 - t) * from.Values[i++];
       }
-      else if (i >= iEnd || this->Materials[j] < this->Materials[i])
+      else if (i >= iEnd || from.Materials[j] < from.Materials[i])
       {
-        material = this->Materials[j];
-        value = t * this->Values[j++];
+        material = from.Materials[j];
+        value = t * from.Values[j++];
       }
       else
       {
-        material = this->Materials[i];
-        value = (1.0 - t) * this->Values[i++] + t * this->Values[j++];
+        material = from.Materials[i];
+        value = (1.0 - t) * from.Values[i++] + t * from.Values[j++];
       }
       if (value > 0.0)
       {
@@ -104,7 +125,6 @@ struct MaterialFractions
         this->Values.push_back(value);
       }
     }
-    this->Offsets.push_back(static_cast<std::int64_t>(this->Materials.size()));
   }
 };
 
@@ -303,7 +323,7 @@ Status CornerFractions(const double* points, std::int64_t numberOfPoints,
           continue;
         }
         std::sort(sums.begin(), sums.end());
-        std::int64_t next = this->Out->Offsets[point];
+        std::int64_t next = this->Out->Begins[point];
         for (const auto& sum : sums)
         {
           this->Out->Materials[next] = sum.first;
@@ -324,9 +344,10 @@ Status CornerFractions(const double* points, std::int64_t numberOfPoints,
     counts[p + 1] += counts[p];
   }
   executor.ReportProgress(0.7);
-  fractions.Offsets = std::move(counts);
-  fractions.Materials.assign(static_cast<std::size_t>(fractions.Offsets.back()), 0);
-  fractions.Values.assign(static_cast<std::size_t>(fractions.Offsets.back()), 0.0);
+  fractions.Begins.assign(counts.begin(), counts.end() - 1);
+  fractions.Ends.assign(counts.begin() + 1, counts.end());
+  fractions.Materials.assign(static_cast<std::size_t>(counts.back()), 0);
+  fractions.Values.assign(static_cast<std::size_t>(counts.back()), 0.0);
   GatherKernel writeKernel{ &incidence, connectivity, materials, angles.data(), outsideMaterial,
     nullptr, &fractions };
   executor.For(0, numberOfPoints, 1 << 12, writeKernel);
@@ -338,6 +359,18 @@ struct MultiMaterialCutOptions
 {
   /// g_k within this of 0 is a tie (a zero vertex of step k).
   double ZeroTolerance = 1e-9;
+  /// Before each step's cut, snap the points next to its interface onto it (VertexSnap, with
+  /// Snap's rule and Alpha; needs the points' coordinates). Only points whose cells are all
+  /// still unassigned move, so earlier interfaces keep their place.
+  bool SnapVertices = false;
+  VertexSnapOptions Snap = QualityDrivenSnap();
+
+  static VertexSnapOptions QualityDrivenSnap()
+  {
+    VertexSnapOptions snap;
+    snap.Rule = SnapRule::QualityDriven;
+    return snap;
+  }
 };
 
 /// Counts of one run.
@@ -348,6 +381,7 @@ struct MultiMaterialCutCounts
   std::int64_t SplitCells = 0;         // cells split, over all steps
   std::int64_t SplitAssignedCells = 0; // of those, cells already assigned (triple lines)
   std::int64_t AddedPoints = 0;
+  std::int64_t SnappedPoints = 0; // snaps, summed over the steps
 };
 
 /// Cuts a simplicial mesh (Dim + 1 point ids per cell) into the regions of K materials.
@@ -360,17 +394,21 @@ public:
   static constexpr std::int32_t Remaining = -1;
 
   /// materials: per input cell, its material index in [0, K) (ties follow it); fractions: per
-  /// input point (see CornerFractions). The peeling order is the index order.
+  /// input point (see CornerFractions); points: Dim coordinates per input point, or null (then
+  /// no snapping, and GetPoints is empty). The peeling order is the index order.
   template <class IdType, class Executor>
-  Status Run(std::int64_t numberOfPoints, const IdType* connectivity, std::int64_t numberOfCells,
-    const std::int32_t* materials, int numberOfMaterials, MaterialFractions fractions,
-    const MultiMaterialCutOptions& options, Executor& executor);
+  Status Run(std::int64_t numberOfPoints, const double* points, const IdType* connectivity,
+    std::int64_t numberOfCells, const std::int32_t* materials, int numberOfMaterials,
+    MaterialFractions fractions, const MultiMaterialCutOptions& options, Executor& executor);
 
   std::int64_t GetNumberOfInputPoints() const { return this->NumberOfInputPoints; }
   std::int64_t GetNumberOfPoints() const { return this->Fractions.GetNumberOfPoints(); }
   /// The edge each added point lies on, in point order: ids A and B (both smaller than the
-  /// point's own id, so points can be placed in order), the point at (1 - T) x_A + T x_B.
+  /// point's own id, so points can be placed in order), the point at (1 - T) x_A + T x_B
+  /// (with the places x_A, x_B had when it was cut; snapping may move a point later).
   const std::vector<CutEdge>& GetAddedPoints() const { return this->AddedPoints; }
+  /// Dim coordinates per output point, snapped points moved (empty without input points).
+  const std::vector<double>& GetPoints() const { return this->Points; }
   std::int64_t GetNumberOfCells() const
   {
     return static_cast<std::int64_t>(this->CellMaterials.size());
@@ -405,8 +443,7 @@ private:
       return 0.0;
     }
     double own = 0.0, others = 0.0;
-    for (std::int64_t e = this->Fractions.Offsets[point]; e < this->Fractions.Offsets[point + 1];
-         ++e)
+    for (std::int64_t e = this->Fractions.Begins[point]; e < this->Fractions.Ends[point]; ++e)
     {
       const std::int32_t material = this->Fractions.Materials[e];
       if (material == step)
@@ -429,8 +466,7 @@ private:
     out.clear();
     for (int v = 0; v <= Dim; ++v)
     {
-      for (std::int64_t e = this->Fractions.Offsets[ids[v]];
-           e < this->Fractions.Offsets[ids[v] + 1]; ++e)
+      for (std::int64_t e = this->Fractions.Begins[ids[v]]; e < this->Fractions.Ends[ids[v]]; ++e)
       {
         if (this->Fractions.Materials[e] > step &&
           this->Fractions.Materials[e] + 1 < this->NumberOfMaterials)
@@ -443,13 +479,21 @@ private:
     out.erase(std::unique(out.begin(), out.end()), out.end());
   }
 
-  void AdjustIncidence(const std::int64_t* ids, int change)
+  static void AdjustIncidence(
+    std::vector<std::int32_t>& incidence, const std::int64_t* ids, int change)
   {
     for (int v = 0; v <= Dim; ++v)
     {
-      this->RemainingIncidence[ids[v]] += change;
+      incidence[ids[v]] += change;
     }
   }
+
+  /// Snaps the step's points (local numbering) in place; movable: free points carrying the
+  /// step's material. Updates the places and fractions of the moved points.
+  template <class Executor>
+  Status SnapStep(std::int32_t step, const std::vector<std::int64_t>& cells,
+    const std::vector<std::int64_t>& points, const std::vector<std::int64_t>& local,
+    std::vector<double>& values, Executor& executor);
 
   template <class Executor>
   Status Step(std::int32_t step, Executor& executor);
@@ -463,7 +507,11 @@ private:
   std::vector<std::int64_t> Cells;
   std::vector<std::int32_t> CellMaterials;
   std::vector<std::int64_t> CellParents;
-  std::vector<std::int32_t> RemainingIncidence;  // per point: remaining cells that use it
+  std::vector<std::int32_t> RemainingIncidence; // per point: remaining cells that use it
+  std::vector<std::int32_t> Incidence;          // per point: cells that use it
+  std::vector<double> Points;                   // Dim per point, or empty
+  bool SnapVertices = false;
+  VertexSnapOptions SnapOptions;
   std::vector<std::vector<std::int64_t>> Visits; // per material index: the cells of its step
   std::vector<std::int64_t> LocalIds;            // per point: id in the current step, or -1
   MultiMaterialCutCounts Counts;
@@ -471,9 +519,10 @@ private:
 
 template <int Dim>
 template <class IdType, class Executor>
-Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const IdType* connectivity,
-  std::int64_t numberOfCells, const std::int32_t* materials, int numberOfMaterials,
-  MaterialFractions fractions, const MultiMaterialCutOptions& options, Executor& executor)
+Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const double* points,
+  const IdType* connectivity, std::int64_t numberOfCells, const std::int32_t* materials,
+  int numberOfMaterials, MaterialFractions fractions, const MultiMaterialCutOptions& options,
+  Executor& executor)
 {
   if (!(options.ZeroTolerance >= 0.0) || !std::isfinite(options.ZeroTolerance) ||
     options.ZeroTolerance >= 0.5)
@@ -484,11 +533,31 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const IdType* con
   {
     return Status::Invalid("there must be at least one material");
   }
-  if (fractions.GetNumberOfPoints() != numberOfPoints ||
-    fractions.Materials.size() != fractions.Values.size() ||
-    fractions.Offsets.back() != static_cast<std::int64_t>(fractions.Materials.size()))
+  bool rowsValid = fractions.GetNumberOfPoints() == numberOfPoints &&
+    static_cast<std::int64_t>(fractions.Ends.size()) == numberOfPoints &&
+    fractions.Materials.size() == fractions.Values.size();
+  for (std::int64_t p = 0; p < numberOfPoints && rowsValid; ++p)
+  {
+    rowsValid = fractions.Begins[p] >= 0 && fractions.Begins[p] <= fractions.Ends[p] &&
+      fractions.Ends[p] <= static_cast<std::int64_t>(fractions.Materials.size());
+  }
+  if (!rowsValid)
   {
     return Status::Invalid("the material fractions do not match the points");
+  }
+  if (options.SnapVertices && points == nullptr)
+  {
+    return Status::Invalid("snapping needs the points' coordinates");
+  }
+  if (points != nullptr)
+  {
+    for (std::int64_t i = 0; i < numberOfPoints * Dim; ++i)
+    {
+      if (!std::isfinite(points[i]))
+      {
+        return Status::Invalid("a point's coordinates are not finite (NaN or infinite)");
+      }
+    }
   }
   for (std::int64_t c = 0; c < numberOfCells; ++c)
   {
@@ -507,6 +576,18 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const IdType* con
     }
   }
   this->Tolerance = options.ZeroTolerance;
+  this->SnapVertices = options.SnapVertices;
+  this->SnapOptions = options.Snap;
+  this->SnapOptions.IsoValue = 0.0;
+  this->SnapOptions.ZeroTolerance = options.ZeroTolerance;
+  if (points != nullptr)
+  {
+    this->Points.assign(points, points + numberOfPoints * Dim);
+  }
+  else
+  {
+    this->Points.clear();
+  }
   this->NumberOfMaterials = numberOfMaterials;
   this->NumberOfInputPoints = numberOfPoints;
   this->InputMaterials = materials;
@@ -525,6 +606,7 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const IdType* con
   this->CellMaterials.assign(static_cast<std::size_t>(numberOfCells), Remaining);
   this->CellParents.resize(static_cast<std::size_t>(numberOfCells));
   this->RemainingIncidence.assign(static_cast<std::size_t>(numberOfPoints), 0);
+  this->Incidence.assign(static_cast<std::size_t>(numberOfPoints), 0);
   this->LocalIds.assign(static_cast<std::size_t>(numberOfPoints), -1);
   this->Visits.assign(static_cast<std::size_t>(numberOfMaterials), {});
   std::vector<std::int32_t> later;
@@ -532,7 +614,8 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const IdType* con
   {
     this->CellParents[cell] = cell;
     const std::int64_t* ids = this->Cells.data() + cell * (Dim + 1);
-    this->AdjustIncidence(ids, 1);
+    AdjustIncidence(this->RemainingIncidence, ids, 1);
+    AdjustIncidence(this->Incidence, ids, 1);
     this->LaterMaterials(ids, -1, later);
     for (const std::int32_t material : later)
     {
@@ -558,6 +641,7 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const IdType* con
     material = material == Remaining ? numberOfMaterials - 1 : material;
   }
   std::vector<std::int32_t>().swap(this->RemainingIncidence);
+  std::vector<std::int32_t>().swap(this->Incidence);
   std::vector<std::int64_t>().swap(this->LocalIds);
   this->InputMaterials = nullptr;
   return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
@@ -567,11 +651,14 @@ template <int Dim>
 template <class Executor>
 Status MultiMaterialCut<Dim>::Step(std::int32_t step, Executor& executor)
 {
-  const std::vector<std::int64_t>& cells = this->Visits[step];
+  std::vector<std::int64_t>& cells = this->Visits[step];
   if (cells.empty())
   {
     return Status::Ok();
   }
+  // Snapping adds cells that may be listed already.
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
   ++this->Counts.Steps;
   this->Counts.VisitedCells += static_cast<std::int64_t>(cells.size());
   const auto count = static_cast<std::int64_t>(cells.size());
@@ -601,6 +688,14 @@ Status MultiMaterialCut<Dim>::Step(std::int32_t step, Executor& executor)
   for (std::size_t p = 0; p < points.size(); ++p)
   {
     values[p] = this->StepValue(points[p], step);
+  }
+  if (this->SnapVertices)
+  {
+    const Status snapped = this->SnapStep(step, cells, points, local, values, executor);
+    if (!snapped.IsOk())
+    {
+      return snapped;
+    }
   }
   auto allZeroSide = [&](std::int64_t c)
   {
@@ -644,12 +739,26 @@ Status MultiMaterialCut<Dim>::Step(std::int32_t step, Executor& executor)
   for (const CutEdge& edge : cut.GetCutEdges())
   {
     const std::int64_t a = points[edge.A], b = points[edge.B];
-    this->Fractions.AppendInterpolated(a, b, edge.T);
+    this->Fractions.AppendInterpolated(this->Fractions, a, b, edge.T);
     this->AddedPoints.push_back(CutEdge{ a, b, edge.T });
   }
   const auto added = static_cast<std::int64_t>(cut.GetCutEdges().size());
   this->Counts.AddedPoints += added;
+  if (!this->Points.empty())
+  {
+    this->Points.resize(static_cast<std::size_t>((firstAdded + added) * Dim));
+    for (std::int64_t e = 0; e < added; ++e)
+    {
+      const CutEdge& edge = this->AddedPoints[firstAdded - this->NumberOfInputPoints + e];
+      for (int c = 0; c < Dim; ++c)
+      {
+        this->Points[(firstAdded + e) * Dim + c] =
+          (1.0 - edge.T) * this->Points[edge.A * Dim + c] + edge.T * this->Points[edge.B * Dim + c];
+      }
+    }
+  }
   this->RemainingIncidence.resize(static_cast<std::size_t>(firstAdded + added), 0);
+  this->Incidence.resize(static_cast<std::size_t>(firstAdded + added), 0);
   this->LocalIds.resize(static_cast<std::size_t>(firstAdded + added), -1);
   auto global = [&](std::int64_t id)
   {
@@ -680,8 +789,9 @@ Status MultiMaterialCut<Dim>::Step(std::int32_t step, Executor& executor)
     }
     if (before == Remaining)
     {
-      this->AdjustIncidence(slotIds, -1);
+      AdjustIncidence(this->RemainingIncidence, slotIds, -1);
     }
+    AdjustIncidence(this->Incidence, slotIds, -1);
     const std::int64_t parent = this->CellParents[slot];
     for (std::int64_t piece = first; piece < last; ++piece)
     {
@@ -712,12 +822,89 @@ Status MultiMaterialCut<Dim>::Step(std::int32_t step, Executor& executor)
       }
       if (material == Remaining)
       {
-        this->AdjustIncidence(this->Cells.data() + cell * (Dim + 1), 1);
+        AdjustIncidence(this->RemainingIncidence, this->Cells.data() + cell * (Dim + 1), 1);
       }
+      AdjustIncidence(this->Incidence, this->Cells.data() + cell * (Dim + 1), 1);
     }
     first = last;
   }
   return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
+}
+
+template <int Dim>
+template <class Executor>
+Status MultiMaterialCut<Dim>::SnapStep(std::int32_t step, const std::vector<std::int64_t>& cells,
+  const std::vector<std::int64_t>& points, const std::vector<std::int64_t>& local,
+  std::vector<double>& values, Executor& executor)
+{
+  const auto count = static_cast<std::int64_t>(points.size());
+  std::vector<double> coordinates(static_cast<std::size_t>(count * Dim));
+  std::vector<std::uint8_t> movable(static_cast<std::size_t>(count), 0);
+  for (std::int64_t p = 0; p < count; ++p)
+  {
+    const std::int64_t point = points[p];
+    std::copy(this->Points.data() + point * Dim, this->Points.data() + (point + 1) * Dim,
+      coordinates.data() + p * Dim);
+    // Carrying the step's material, so that every cell around it is one of the step's.
+    movable[p] = this->Fractions.Of(point, step) > 0.0 ? 1 : 0;
+  }
+  const std::vector<double> before = values;
+  VertexSnapOptions options = this->SnapOptions;
+  options.Movable = movable.data();
+  QuietExecutor<Executor> quiet{ &executor };
+  VertexSnap<Dim> snap;
+  const Status status = snap.Snap(coordinates.data(), values.data(), count, local.data(),
+    static_cast<std::int64_t>(local.size()) / (Dim + 1), options, quiet);
+  if (!status.IsOk())
+  {
+    return status;
+  }
+  this->Counts.SnappedPoints += snap.GetCounts().Snapped;
+  // A moved point takes the fractions of the place it moved to on its edge, from the rows as
+  // they were before any of this step's moves.
+  const std::vector<std::uint8_t>& moved = snap.GetMovedFlags();
+  const std::vector<std::int64_t>& edges = snap.GetSnapEdges();
+  MaterialFractions staged;
+  std::vector<std::int64_t> movedPoints;
+  for (std::int64_t p = 0; p < count; ++p)
+  {
+    if (!moved[p])
+    {
+      continue;
+    }
+    const std::int64_t w = edges[p];
+    const double other = moved[w] ? before[w] : values[w];
+    const double t = std::min(1.0, std::max(0.0, before[p] / (before[p] - other)));
+    staged.AppendInterpolated(this->Fractions, points[p], points[w], t);
+    movedPoints.push_back(p);
+  }
+  for (std::size_t i = 0; i < movedPoints.size(); ++i)
+  {
+    const std::int64_t p = movedPoints[i];
+    this->Fractions.ReplaceRow(points[p], staged, static_cast<std::int64_t>(i));
+    std::copy(coordinates.data() + p * Dim, coordinates.data() + (p + 1) * Dim,
+      this->Points.data() + points[p] * Dim);
+  }
+  // A moved point may now carry materials its cells did not: they join those steps (which
+  // drop repeated cells), so that every cell around a later cut edge is cut.
+  std::vector<std::int32_t> later;
+  for (std::size_t c = 0; c < cells.size() && !movedPoints.empty(); ++c)
+  {
+    bool touched = false;
+    for (int v = 0; v <= Dim; ++v)
+    {
+      touched = touched || moved[local[c * (Dim + 1) + v]] != 0;
+    }
+    if (touched)
+    {
+      this->LaterMaterials(this->Cells.data() + cells[c] * (Dim + 1), step, later);
+      for (const std::int32_t material : later)
+      {
+        this->Visits[material].push_back(cells[c]);
+      }
+    }
+  }
+  return Status::Ok();
 }
 
 } // namespace stm

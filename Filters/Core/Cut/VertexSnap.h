@@ -87,6 +87,10 @@ struct VertexSnapOptions
   /// elements around the snapped point would have a worst condition number above this bound
   /// and above that of the plain cut there. 0 (the default): the paper's rule alone.
   double QualityBound = 0.0;
+  /// Per point, 0 for a point that must stay where it is (a snap candidate never; its value
+  /// may still be nudged); null: every point may move. The multi-material cut fixes the points
+  /// of cells whose material is already assigned.
+  const std::uint8_t* Movable = nullptr;
 };
 
 struct VertexSnapCounts
@@ -173,6 +177,9 @@ public:
   const std::vector<std::uint8_t>& GetRefusedFlags() const { return this->Refused; }
   /// Per point: 1 where the last Snap nudged it (changed its value, not its place).
   const std::vector<std::uint8_t>& GetNudgedFlags() const { return this->Nudged; }
+  /// Per moved point: the other end of the edge it snapped along (from its first place); -1
+  /// where it did not move.
+  const std::vector<std::int64_t>& GetSnapEdges() const { return this->SnapEdges; }
   const VertexSnapCounts& GetCounts() const { return this->Counts; }
 
 private:
@@ -235,6 +242,7 @@ private:
   std::vector<std::uint8_t> Moved;
   std::vector<std::uint8_t> Refused;
   std::vector<std::uint8_t> Nudged;
+  std::vector<std::int64_t> SnapEdges;
   VertexSnapCounts Counts;
 };
 
@@ -386,6 +394,7 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
   this->Moved.assign(static_cast<std::size_t>(std::max<std::int64_t>(numberOfPoints, 0)), 0);
   this->Refused.assign(this->Moved.size(), 0);
   this->Nudged.assign(this->Moved.size(), 0);
+  this->SnapEdges.assign(this->Moved.size(), -1);
   if (!(options.Alpha >= 0.0 && options.Alpha <= 0.5) || !(options.ZeroTolerance >= 0.0) ||
     !(options.QualityBound >= 0.0) || !std::isfinite(options.ZeroTolerance) ||
     !std::isfinite(options.IsoValue))
@@ -505,7 +514,8 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
           }
           for (int k = 0; k <= Dim; ++k)
           {
-            if (classes[ids[k]] != static_cast<std::int8_t>(VertexClass::Zero))
+            if (classes[ids[k]] != static_cast<std::int8_t>(VertexClass::Zero) &&
+              (options.Movable == nullptr || options.Movable[ids[k]] != 0))
             {
               flags[ids[k]].store(1, std::memory_order_relaxed);
             }
@@ -830,8 +840,9 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     }
     return value;
   };
-  auto apply = [&](std::int64_t v, const double* position)
+  auto apply = [&](std::int64_t v, const double* position, std::int64_t other)
   {
+    this->SnapEdges[v] = other;
     std::copy(position, position + Dim, points + v * Dim);
     values[v] = iso;
     classes[v] = static_cast<std::int8_t>(VertexClass::Zero);
@@ -842,7 +853,7 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
   // Returns Snapped with `position`, or the reason no snap was taken, with `value` nudged or
   // left; `best` becomes the chosen option's worst.
   auto improve = [&](std::int64_t v, const std::vector<Claim>& edges, bool allZero, bool snapOnTie,
-                   double& best, double* position, double& value) -> Outcome
+                   double& best, double* position, double& value, std::int64_t& other) -> Outcome
   {
     Outcome outcome = allZero ? AllZero : NonPositive;
     bool snap = false;
@@ -864,6 +875,7 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
       {
         best = snapped;
         snap = true;
+        other = edges[e].Other;
         std::copy(candidate, candidate + Dim, position);
       }
     }
@@ -909,7 +921,7 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
       }
       if (outcome == Snapped)
       {
-        apply(v, position);
+        apply(v, position, claims[v].Other);
         return Snapped;
       }
       const double nudged = nudgedValue(v, edges);
@@ -924,10 +936,11 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     // distance <= 1/2 and nudging; on a tie, snapping (the nearest edge first), then cutting.
     double best = localWorst(v, x, values[v]);
     double value = values[v];
-    const Outcome outcome = improve(v, edges, allZero, true, best, position, value);
+    std::int64_t other = -1;
+    const Outcome outcome = improve(v, edges, allZero, true, best, position, value, other);
     if (outcome == Snapped)
     {
-      apply(v, position);
+      apply(v, position, other);
       return Snapped;
     }
     if (value != values[v])
@@ -1152,10 +1165,12 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
       collectEdges(v, edges);
       double position[Dim];
       double value = firstValue;
-      const Outcome outcome = improve(v, edges, closesACell(v), false, best, position, value);
+      std::int64_t other = -1;
+      const Outcome outcome =
+        improve(v, edges, closesACell(v), false, best, position, value, other);
       if (outcome == Snapped)
       {
-        apply(v, position);
+        apply(v, position, other);
         return Snapped;
       }
       if (value != firstValue)

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // stmMultiMaterialCut through the VTK pipeline: nested ellipsoids (3D and a 2D slice) give a
 // valid conforming mesh in which every label keeps its components and about its voxel volume,
-// with the input's cell and point data carried over; two labels give exactly what
-// stmMarchingSimplices gives on the labels function; the result does not depend on the SMP
+// with the input's cell and point data carried over; two labels without snapping give exactly
+// what stmMarchingSimplices gives on the labels function; the result does not depend on the SMP
 // backend; all 116 labels of the AAL atlas are kept; bad input gets clear errors.
 
 #include "stmFilterTestUtilities.h"
@@ -17,6 +17,7 @@
 #include "vtkDataArray.h"
 #include "vtkImageData.h"
 #include "vtkIntArray.h"
+#include "vtkMath.h"
 #include "vtkNIFTIImageReader.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
@@ -68,9 +69,9 @@ struct CutPipeline
 };
 
 /// Checks the nested ellipsoids: valid, the image's labels, each within 3 % of its voxel
-/// measure when it has over 1000 voxels, else 15 % (the small ball, about 130 voxels, loses 13 %
-/// to the rounding of the labels function, as the binary cut does), the parents' data carried
-/// over.
+/// measure when it has over 1000 voxels, else 20 % (the small ball, about 130 voxels, loses 13 %
+/// to the rounding of the labels function, as the binary cut does, 16 % with snapping), the
+/// parents' data carried over.
 template <int Dim>
 void CheckEllipsoids(vtkImageData* image, const int axes[Dim])
 {
@@ -94,22 +95,29 @@ void CheckEllipsoids(vtkImageData* image, const int axes[Dim])
     }
     ASSERT_EQ(report.VolumePerMaterial.count(entry.first), 1u) << "label " << entry.first;
     const double expected = static_cast<double>(entry.second) * voxel;
-    const double relative = entry.second > 1000 ? 0.03 : 0.15;
+    const double relative = entry.second > 1000 ? 0.03 : 0.2;
     EXPECT_NEAR(report.VolumePerMaterial.at(entry.first), expected, relative * expected)
       << "label " << entry.first;
   }
   EXPECT_EQ(
     mesh->GetNumberOfPoints(), input->GetNumberOfPoints() + pipeline.Cut->GetNumberOfCutPoints());
-  // The input points come first, unchanged; OriginalMaterial is the input cell's Material.
-  for (vtkIdType p = 0; p < input->GetNumberOfPoints(); p += 97)
+  // The input points come first, in their plane, only snapped ones moved (each at most once
+  // per step, by less than an edge); OriginalMaterial is the input cell's Material.
+  vtkIdType moved = 0;
+  for (vtkIdType p = 0; p < input->GetNumberOfPoints(); ++p)
   {
     double a[3], b[3];
     input->GetPoint(p, a);
     mesh->GetPoint(p, b);
-    EXPECT_EQ(a[0], b[0]);
-    EXPECT_EQ(a[1], b[1]);
-    EXPECT_EQ(a[2], b[2]);
+    moved += a[0] != b[0] || a[1] != b[1] || a[2] != b[2] ? 1 : 0;
+    EXPECT_LT(std::sqrt(vtkMath::Distance2BetweenPoints(a, b)), 2.0) << "point " << p;
+    if (Dim == 2)
+    {
+      EXPECT_EQ(a[2], b[2]) << "point " << p;
+    }
   }
+  EXPECT_GT(moved, 0);
+  EXPECT_LE(moved, pipeline.Cut->GetNumberOfSnappedPoints());
   vtkDataArray* original = mesh->GetCellData()->GetArray("OriginalMaterial");
   vtkDataArray* material = mesh->GetCellData()->GetArray("Material");
   ASSERT_NE(original, nullptr);
@@ -148,6 +156,7 @@ TEST(MultiMaterialCutFilter, TwoLabelsGiveTheBinaryCut)
   auto image = stmTest::MakeLabelImage(dims, spacing, origin,
     [&](int i, int j, int k) { return stmTest::NestedEllipsoids(i, j, k, dims) == 1 ? 3 : 0; });
   CutPipeline pipeline(image);
+  pipeline.Cut->VertexSnappingOff();
   vtkUnstructuredGrid* multi = pipeline.Mesh();
   vtkNew<stmMarchingSimplices> binary;
   binary->SetInputConnection(pipeline.Tessellate->GetOutputPort());
@@ -241,11 +250,17 @@ TEST(MultiMaterialCutFilter, AalAtlasKeepsEveryLabel)
       worstLabel = entry.first;
     }
   }
-  // The labels function rounds the convex edges of small labels: see docs/multi-material.md.
-  EXPECT_LE(worstLarge, 0.04);
+  // The labels function rounds the convex edges of small labels, and snapping without
+  // smoothing leaves elements far from the goals (condition 4, 10 degrees): these
+  // bounds hold the present figures (docs/multi-material.md).
+  EXPECT_LE(worstLarge, 0.045);
   EXPECT_LE(worstAll, 0.08);
+  EXPECT_LE(shapes.WorstCondition, 20.0);
+  EXPECT_GE(shapes.SmallestDihedral, 2.0);
+  EXPECT_GT(pipeline.Cut->GetNumberOfSnappedPoints(), 0);
   std::cout << "AAL, 116 labels, multi-material cut: " << mesh->GetNumberOfCells()
             << " tetrahedra, " << pipeline.Cut->GetNumberOfCutPoints() << " cut points, "
+            << pipeline.Cut->GetNumberOfSnappedPoints() << " snaps, "
             << pipeline.Cut->GetNumberOfSplitAssignedCells() << " assigned cells split; worst "
             << "volume error " << 100 * worstLarge << " % (label " << worstLabel
             << ", labels > 1000 voxels), " << 100 * worstAll << " % (all); worst condition "
