@@ -46,7 +46,8 @@ DEFAULT_TESSELLATE_PARAMETERS = {
     "elements": "simplicial", "templates": "regular", "cell_template": "checkerboard",
     "boundary_layers": 0}
 # The cut parameters of the summary when none of their options is given, and with STAIRCASE.
-DEFAULT_CUT_PARAMETERS = {"separating": "labels", "materials": "merged", "output_mode": "volume",
+DEFAULT_CUT_PARAMETERS = {"separating": "labels", "materials": "merged", "thin_parts": "refine",
+                          "output_mode": "volume",
                           "keep": "both",
                           "iso": 0, "alpha": 1.0 / 3.0, "snap": "quality",
                           "smooth_iterations": 20, "smooth_method": "taubin"}
@@ -2627,6 +2628,59 @@ def case_materials_separate(c):
                        "--snap", "none", "--stop-after", "cut"])
     check("skipped (--snap none)" in out and re.search(r"materials, [0-9]+ snaps", out) is None,
           "--snap none: the cut stage snapped")
+
+
+def specks(i, j, k):
+    """Labels 1 (a box), 2 (single voxels in it and a one-voxel line), 3 (single voxels in the
+    background) in 14 x 12 x 10."""
+    if (i, j, k) in ((1, 1, 1), (9, 8, 6), (12, 10, 8)):
+        return 3
+    if 4 <= i <= 9 and 3 <= j <= 8 and 2 <= k <= 7:
+        if (i, j, k) in ((6, 5, 4), (8, 7, 3)) or (j == 6 and k == 5 and i >= 5):
+            return 2
+        return 1
+    return 0
+
+
+def case_thin_parts(c):
+    # Specks and a one-voxel line: the cut at the labels function loses them at voxel size; the
+    # thin parts refined to half a voxel keep every component, for each material and for the
+    # body.
+    image, _ = write_label_image(c, "specks.vti", (14, 12, 10), specks)
+    results = {}
+    for name, arguments in [("separate", ["--materials", "separate"]),
+                            ("separate_ignored", ["--materials", "separate", "--thin-parts",
+                                                  "ignore"]),
+                            ("merged", []), ("merged_ignored", ["--thin-parts", "ignore"])]:
+        output, summary_path = c.path(name + ".vtu"), c.path(name + ".json")
+        out, _ = c.run_ok([image, "-o", output, "--summary", summary_path, "--stop-after", "cut"] +
+                          arguments)
+        summary = load_summary(summary_path)
+        check(summary["parameters"]["thin_parts"] ==
+              ("ignore" if name.endswith("ignored") else "refine"),
+              "%s: parameters.thin_parts %s" % (name, summary["parameters"]["thin_parts"]))
+        thin = stage(summary, "spacetree")["thin_voxels"]
+        check((("%d thin voxels refined" % thin) in out) == (thin > 0),
+              "%s: the table does not show the %d thin voxels" % (name, thin))
+        results[name] = (thin,
+                         sum(entry["lost_components"] for entry in summary["materials"]
+                             if entry["material"] != 0))
+        check(min(read_cut(output)["measures"]) > 0, "%s: a cell is not positive" % name)
+    check(results["separate"][0] > 0 and results["separate"][1] == 0,
+          "--materials separate: %d thin voxels, %d components lost" % results["separate"])
+    check(results["separate_ignored"][0] == 0 and results["separate_ignored"][1] > 0,
+          "--thin-parts ignore: %d thin voxels, %d components lost" % results["separate_ignored"])
+    # The body (1, 2 and 3 merged): only the specks of 3 in the background are thin.
+    check(results["merged"][0] > 0 and results["merged"][1] == 0,
+          "merged: %d thin voxels, %d components lost" % results["merged"])
+    check(results["merged_ignored"][1] > 0,
+          "merged, --thin-parts ignore: %d components lost" % results["merged_ignored"][1])
+    # No cut at the labels function: nothing to refine, and a warning when asked for.
+    _, err = c.run_ok([image, "-o", c.path("stair.vtu"), "--thin-parts", "refine"] + STAIRCASE)
+    check("--thin-parts applies to a cut at the labels function only" in err,
+          "no warning for --thin-parts with --separating none")
+    c.run_failing([image, "-o", c.path("x.vtu"), "--thin-parts", "maybe"], 2,
+                  "--thin-parts: 'maybe' is not one of refine, ignore")
 
 
 def case_error_merge_values(c):

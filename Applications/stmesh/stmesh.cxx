@@ -147,7 +147,8 @@ const char* const UsageText =
               [--cell-template checkerboard|kuhn] [--boundary-layer N]
               [--separating labels|smooth:SIGMA|gray:FILE:ISO|sphere:CX,CY,CZ,R|none]
               [--output-mode volume|surface] [--keep both|inside|outside] [--iso V]
-              [--materials merged|separate] [--alpha A] [--snap threshold|quality|none]
+              [--materials merged|separate] [--thin-parts refine|ignore]
+              [--alpha A] [--snap threshold|quality|none]
               [--smooth-iterations N] [--smooth-method taubin|laplacian]
               [--stop-after spacetree|balance|tessellate|snap|cut|smooth] [--threads N]
               [--summary FILE.json] [--compressor lz4|zlib|none] [--interfaces FILE.vtp]
@@ -179,6 +180,11 @@ Arguments:
                         the quality rule before each material unless --snap none; --output-mode
                         surface, --keep and --iso do not apply: --interfaces writes the
                         interfaces).
+  --thin-parts T        refine (the default) or ignore the thin parts of the labels: with
+                        --separating labels, the voxels the cut would lose or pinch off (one-
+                        voxel specks, lines and layers of the body, or of each material with
+                        --materials separate) are refined to half a voxel, so that the cut
+                        keeps every connected component. The spacetree stage says how many.
   --merge S1,S2,...:T   merge labels before meshing: the voxels of the source labels S1, S2, ...
                         get label T (a new label, one of the sources, or a label the image
                         already holds). Repeat the option for several groups, as in
@@ -664,6 +670,8 @@ struct Options
   bool SeparatingGiven = false;
   bool StopAfterGiven = false;
   bool SeparateMaterials = false; // --materials separate
+  bool RefineThinParts = true;    // --thin-parts refine
+  bool ThinPartsGiven = false;
 
   /// Whether the run reaches the snap stage (it may still skip it: --snap none), the cut stage
   /// and the smooth stage; whether the smooth stage does anything; whether the run writes the
@@ -679,6 +687,16 @@ struct Options
   bool WritesSurface() const
   {
     return this->Cuts() && this->OutputMode == stmMarchingSimplices::SURFACE;
+  }
+  /// The spacetree's thin-part refinement: for a cut at the labels function only.
+  int ThinPartMode() const
+  {
+    if (!this->RefineThinParts || !this->Cuts() || this->Separating.Kind != SeparatingKind::Labels)
+    {
+      return stmImageToSpacetree::NO_THIN_PARTS;
+    }
+    return this->SeparateMaterials ? stmImageToSpacetree::THIN_MATERIAL_PARTS
+                                   : stmImageToSpacetree::THIN_BODY_PARTS;
   }
 };
 
@@ -1236,7 +1254,7 @@ Options ParseCommandLine(int argc, char* argv[])
       "--balance-label", "--balance-region", "--elements", "--templates", "--cell-template",
       "--boundary-layer", "--separating", "--output-mode", "--keep", "--iso", "--alpha", "--snap",
       "--smooth-iterations", "--smooth-method", "--merge", "--min-component-voxels", "--interfaces",
-      "--materials" };
+      "--materials", "--thin-parts" };
     if (valueOptions.count(name) == 0)
     {
       throw UsageError("unknown option '" + name + "'");
@@ -1345,6 +1363,15 @@ Options ParseCommandLine(int argc, char* argv[])
         throw UsageError("--alpha: A must be between 0 and 0.5, got " + value);
       }
       options.SnapOnlyOptions.push_back(name);
+    }
+    else if (name == "--thin-parts")
+    {
+      if (value != "refine" && value != "ignore")
+      {
+        throw UsageError("--thin-parts: '" + value + "' is not one of refine, ignore");
+      }
+      options.RefineThinParts = value == "refine";
+      options.ThinPartsGiven = true;
     }
     else if (name == "--materials")
     {
@@ -1885,7 +1912,8 @@ struct StageReport
   std::string Name;
   bool Skipped = false;
   double Seconds = 0.0;
-  long long Leaves = -1; // -1: not applicable
+  long long Leaves = -1;     // -1: not applicable
+  long long ThinVoxels = -1; // the spacetree stage: voxels refined as thin parts
   long long Cells = -1;
   long long Points = -1;
   long long FileBytes = -1;
@@ -2440,6 +2468,7 @@ void ConfigureSpacetree(stmImageToSpacetree* spacetree, const Options& options, 
     spacetree->AddBodyLabel(label);
   }
   spacetree->SetMaxCellSize(options.MaxCellSize);
+  spacetree->SetThinPartRefinement(options.ThinPartMode());
   const bool threeD = info.SpannedAxes.size() == 3;
   if (options.PatternCounts == 2 && threeD)
   {
@@ -3357,6 +3386,7 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
        << ", \"balance_region\": " << JsonRegion(options.BalanceRegion, true)
        << ", \"separating\": " << JsonString(options.Separating.Text)
        << ", \"materials\": " << JsonString(options.SeparateMaterials ? "separate" : "merged")
+       << ", \"thin_parts\": " << JsonString(options.RefineThinParts ? "refine" : "ignore")
        << ", \"output_mode\": " << JsonString(KeywordName(options.OutputMode, OutputModes))
        << ", \"keep\": " << JsonString(KeywordName(options.KeepSide, KeptSides))
        << ", \"iso\": " << JsonNumber(options.IsoValue)
@@ -3413,6 +3443,10 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
          << ", \"leaves\": " << JsonCount(stage.Leaves)
          << ", \"file_bytes\": " << JsonCount(stage.FileBytes)
          << ", \"peak_rss_mib\": " << std::setprecision(3) << stage.PeakRssMiB;
+    if (stage.ThinVoxels >= 0)
+    {
+      json << ", \"thin_voxels\": " << stage.ThinVoxels;
+    }
     if (stage.Tessellation)
     {
       json << ", \"inserted_points\": " << JsonCount(stage.InsertedPoints)
@@ -3576,6 +3610,14 @@ void WarnAboutIgnoredCutOptions(const Options& options)
       Diagnostics() << "stmesh: warning: --keep applies to volume output only; ignored with "
                        "--output-mode surface\n";
     }
+  }
+  if (options.ThinPartsGiven && options.RefineThinParts &&
+    (!options.Cuts() || options.Separating.Kind != SeparatingKind::Labels))
+  {
+    Diagnostics() << "stmesh: warning: --thin-parts applies to a cut at the labels function "
+                     "only; ignored "
+                  << (options.Cuts() ? "with --separating " + options.Separating.Text : ignoredWith)
+                  << '\n';
   }
   if (options.SeparateMaterials && !options.Cuts())
   {
@@ -4718,6 +4760,12 @@ int Run(const Options& options)
     vtkNew<stmImageToSpacetree> spacetree;
     ConfigureSpacetree(spacetree, options, image, summary.Image);
     grid = RunStage(spacetree, image, "building the spacetree", spacetreeReport, true);
+    spacetreeReport.ThinVoxels = static_cast<long long>(spacetree->GetNumberOfThinVoxels());
+    if (spacetree->GetNumberOfThinVoxels() > 0)
+    {
+      spacetreeReport.Description +=
+        ", " + std::to_string(spacetree->GetNumberOfThinVoxels()) + " thin voxels refined";
+    }
   }
   image = nullptr; // the image is no longer needed: free it before the next stages
   summary.Stages.push_back(spacetreeReport);

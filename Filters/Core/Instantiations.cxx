@@ -11,6 +11,7 @@
 #include "Cut/VertexSnap.h"
 #include "Smooth/BoundarySmooth.h"
 #include "Spacetree/SpacetreeBuild.h"
+#include "Spacetree/ThinParts.h"
 #include "Surface/InterfaceFacets.h"
 #include "Tessellate/SpacetreeTessellation.h"
 
@@ -44,6 +45,8 @@ void InstantiatePipeline()
   tessellator.Prepare(tree, SpacetreeTessellationOptions(), executor);
   tessellator.WriteSimplices(static_cast<std::int64_t*>(nullptr), nullptr, executor);
   CheckSimplicialMesh<Dim>({}, {}, nullptr);
+  std::vector<std::uint8_t> thin;
+  ThinPartVoxels<Dim>(image, false, thin, executor);
   std::vector<std::int8_t> indicator;
   BodyIndicator<Dim>(tree, indicator, executor);
   MarchingSimplices<Dim> cutter;

@@ -7,6 +7,7 @@
 #include "Balance/SpacetreeGrading.h"
 #include "Spacetree/RefinementPlan.h"
 #include "Spacetree/SpacetreeBuild.h"
+#include "Spacetree/ThinParts.h"
 
 #include "vtkArrayDispatch.h"
 #include "vtkCellData.h"
@@ -145,6 +146,15 @@ struct RefinementRequest
   /// Per voxel: the sizing field; empty without one.
   std::vector<double> Sizing;
   double Grading;
+  /// stmImageToSpacetree::ThinPartModes.
+  int ThinParts = 0;
+};
+
+/// What BuildTree reports besides the tree.
+struct BuildReport
+{
+  vtkIdType ThinVoxels = 0;
+  std::string Warning;
 };
 
 /// Largest number of lattice cells (voxels times their subdivision) the dense level maps of
@@ -155,7 +165,7 @@ template <int Dim>
 bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxelDims[3],
   stmSpacetreeGeometry geometry, const std::vector<long long>& materialLabels,
   const RefinementRequest& request, stmSMPExecutor& executor, vtkUnstructuredGrid* output,
-  std::string& error)
+  BuildReport& report, std::string& error)
 {
   stm::MaterialImage<Dim> image;
   stm::RefinementPlanOptions<Dim> planOptions;
@@ -211,19 +221,61 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
   {
     finest = finest > 0 ? std::min(finest, size) : size;
   }
-  planOptions.FinestSize = finest;
+  // Thin parts: refined to half a voxel on every axis, which the plan must reach.
+  std::vector<std::uint8_t> thin;
+  if (request.ThinParts != stmImageToSpacetree::NO_THIN_PARTS)
+  {
+    const stm::Status thinStatus = stm::ThinPartVoxels<Dim>(
+      image, request.ThinParts == stmImageToSpacetree::THIN_BODY_PARTS, thin, executor);
+    if (!thinStatus.IsOk())
+    {
+      error = thinStatus.GetMessage();
+      return false;
+    }
+    report.ThinVoxels = std::count(thin.begin(), thin.end(), std::uint8_t{ 1 });
+    if (report.ThinVoxels == 0)
+    {
+      thin.clear();
+    }
+  }
+  auto planLevels = [&](stm::RefinementPlan<Dim>& result)
+  {
+    planOptions.FinestSize = finest;
+    if (!thin.empty())
+    {
+      const double half =
+        0.5 * *std::min_element(planOptions.Spacing.begin(), planOptions.Spacing.end());
+      planOptions.FinestSize = finest > 0 ? std::min(finest, half) : half;
+    }
+    return stm::PlanRefinement<Dim>(image.Dimensions, planOptions, result);
+  };
+  auto latticeCellsOf = [&](const stm::RefinementPlan<Dim>& result)
+  {
+    std::int64_t cells = 1;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      cells *= image.Dimensions[axis] * result.VoxelSubdivision[axis];
+    }
+    return cells;
+  };
   stm::RefinementPlan<Dim> plan;
-  stm::Status status = stm::PlanRefinement<Dim>(image.Dimensions, planOptions, plan);
+  stm::Status status = planLevels(plan);
+  if (status.IsOk() && !thin.empty() && latticeCellsOf(plan) > MaximumLatticeCells)
+  {
+    report.Warning = "the thin parts (" + std::to_string(report.ThinVoxels) +
+      " voxels) are not refined: half-voxel cells would make the lattice too large (" +
+      std::to_string(latticeCellsOf(plan)) + " cells, at most " +
+      std::to_string(MaximumLatticeCells) + "); a cut may lose them";
+    thin.clear();
+    report.ThinVoxels = 0;
+    status = planLevels(plan);
+  }
   if (!status.IsOk())
   {
     error = status.GetMessage();
     return false;
   }
-  std::int64_t latticeCells = 1;
-  for (int axis = 0; axis < Dim; ++axis)
-  {
-    latticeCells *= image.Dimensions[axis] * plan.VoxelSubdivision[axis];
-  }
+  const std::int64_t latticeCells = latticeCellsOf(plan);
   if (latticeCells > MaximumLatticeCells)
   {
     error = "refinement below the voxel size makes the lattice too large (" +
@@ -236,7 +288,7 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
   std::vector<std::uint8_t> minimumLevels;
   const bool labelSizes = std::any_of(request.MaterialMaxCellSizes.begin(),
     request.MaterialMaxCellSizes.end(), [](double size) { return size > 0; });
-  if (labelSizes || !request.InRegion.empty() || !request.Sizing.empty())
+  if (labelSizes || !request.InRegion.empty() || !request.Sizing.empty() || !thin.empty())
   {
     const std::vector<double> physicalEdges = plan.LargestEdges(planOptions.Spacing);
     const std::vector<double> voxelEdges =
@@ -251,6 +303,9 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
     const auto regionLevel = static_cast<std::uint8_t>(request.InRegion.empty()
         ? 0
         : plan.CoarsestLevelWithin(request.RegionMaxCellSize, physicalEdges));
+    // Half a voxel on every axis: voxel and face centres become lattice points.
+    const auto thinLevel =
+      static_cast<std::uint8_t>(thin.empty() ? 0 : plan.CoarsestLevelWithin(0.5, voxelEdges));
     minimumLevels.resize(materials.size());
     vtkSMPTools::For(0, static_cast<vtkIdType>(materials.size()),
       [&](vtkIdType begin, vtkIdType end)
@@ -258,6 +313,10 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
         for (vtkIdType v = begin; v < end; ++v)
         {
           std::uint8_t level = materialLevels[materials[v]];
+          if (!thin.empty() && thin[v])
+          {
+            level = std::max(level, thinLevel);
+          }
           if (!request.InRegion.empty() && request.InRegion[v])
           {
             level = std::max(level, regionLevel);
@@ -463,6 +522,10 @@ void stmImageToSpacetree::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "RegionMaxCellSize: " << this->RegionMaxCellSize << "\n";
   os << indent << "RegionBandWidth: " << this->RegionBandWidth << "\n";
   os << indent << "Grading: " << this->Grading << "\n";
+  static const char* const thinPartModes[] = { "NoThinParts", "ThinBodyParts",
+    "ThinMaterialParts" };
+  os << indent << "ThinPartRefinement: " << thinPartModes[this->ThinPartRefinement] << "\n";
+  os << indent << "NumberOfThinVoxels: " << this->NumberOfThinVoxels << "\n";
   os << indent << "UseSizingArray: " << (this->UseSizingArray ? "On" : "Off") << "\n";
 }
 
@@ -670,6 +733,7 @@ int stmImageToSpacetree::RequestData(
   std::copy(this->RootCellSize, this->RootCellSize + 3, request.RootCellSize);
   request.MaxCellSize = this->MaxCellSize;
   request.Grading = this->Grading;
+  request.ThinParts = this->ThinPartRefinement;
   if (this->Grading != 0 && !(this->Grading >= 1.5))
   {
     vtkErrorMacro("Grading must be 0 (off) or at least 1.5, got " << this->Grading << ".");
@@ -784,10 +848,18 @@ int stmImageToSpacetree::RequestData(
   stmSMPExecutor executor(this);
   executor.SetProgressRange(0.25, 0.9);
   std::string error;
+  BuildReport report;
+  this->NumberOfThinVoxels = 0;
   const bool built = geometry.Dimension == 3
-    ? BuildTree<3>(materials, voxelDims, geometry, materialLabels, request, executor, output, error)
+    ? BuildTree<3>(
+        materials, voxelDims, geometry, materialLabels, request, executor, output, report, error)
     : BuildTree<2>(
-        materials, voxelDims, geometry, materialLabels, request, executor, output, error);
+        materials, voxelDims, geometry, materialLabels, request, executor, output, report, error);
+  if (!report.Warning.empty())
+  {
+    vtkWarningMacro(<< report.Warning);
+  }
+  this->NumberOfThinVoxels = report.ThinVoxels;
   if (!built)
   {
     if (!this->GetAbortExecute())

@@ -17,7 +17,9 @@
  * possibly below the voxel size), a sizing field (a point or cell array of the image with the
  * label array's association, in physical units), and grading (a leaf at most Grading times
  * larger than the finest leaf within its own size). Membership of a voxel in the region is
- * decided at the voxel centre.
+ * decided at the voxel centre. ThinPartRefinement refines, to half a voxel, the voxels that a
+ * cut at the labels function would lose or pinch off (see Filters/Core/Spacetree/ThinParts.h),
+ * so that the cut keeps every connected component.
  *
  * The output is a vtkUnstructuredGrid with one hexahedron (quad in 2D) per leaf and the cell
  * arrays "Level" (0 = root), "Material" (the label, or BackgroundLabel outside the body) and
@@ -160,6 +162,36 @@ public:
   vtkGetMacro(Grading, double);
   ///@}
 
+  enum ThinPartModes
+  {
+    /// No refinement for thin parts (the staircase mesh keeps every voxel anyway).
+    NO_THIN_PARTS = 0,
+    /// The thin parts of the body against the background, for the binary cut of the body.
+    THIN_BODY_PARTS = 1,
+    /// The thin parts of every material, for the multi-material cut.
+    THIN_MATERIAL_PARTS = 2
+  };
+
+  ///@{
+  /**
+   * Refine to half a voxel (on every axis) the voxels that a cut at the labels function would
+   * lose or pinch off: voxels whose material is the strict majority at none of their corners,
+   * and pairs of same-material neighbours whose shared face has no such corner (one-voxel
+   * specks, lines and layers). Their centres and face centres become mesh points, so the cut
+   * keeps a piece of every connected component. NO_THIN_PARTS (the default), THIN_BODY_PARTS
+   * (body against background, for stmMarchingSimplices) or THIN_MATERIAL_PARTS (every
+   * material, for stmMultiMaterialCut). Skipped, with a warning, when the refined lattice
+   * would be too large.
+   */
+  vtkSetClampMacro(ThinPartRefinement, int, NO_THIN_PARTS, THIN_MATERIAL_PARTS);
+  vtkGetMacro(ThinPartRefinement, int);
+  ///@}
+
+  /**
+   * The voxels the last update refined as thin parts.
+   */
+  vtkGetMacro(NumberOfThinVoxels, vtkIdType);
+
   ///@{
   /**
    * Use input array 1 (SetInputArrayToProcess(1, ...)) as a sizing field: the largest leaf
@@ -192,6 +224,8 @@ protected:
   double RegionBandWidth = 0;
   double Grading = 0;
   bool UseSizingArray = false;
+  int ThinPartRefinement = NO_THIN_PARTS;
+  vtkIdType NumberOfThinVoxels = 0;
 
 private:
   stmImageToSpacetree(const stmImageToSpacetree&) = delete;

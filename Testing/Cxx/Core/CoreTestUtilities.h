@@ -24,11 +24,13 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <initializer_list>
 #include <iomanip>
 #include <map>
 #include <numeric>
 #include <random>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -389,6 +391,177 @@ inline ::testing::AssertionResult CheckerMeasureMatches(double checkerValue, dou
   }
   return ::testing::AssertionFailure() << std::setprecision(17) << "checker value " << checkerValue
                                        << " differs from the exact " << exactValue;
+}
+
+/// Per cell, the id of its connected component (through shared facets) among the cells of its
+/// label: the smallest cell id of the component.
+template <int D>
+std::vector<std::int64_t> CellComponentIds(
+  const std::vector<std::int64_t>& cells, const std::vector<std::int64_t>& labels)
+{
+  const auto count = static_cast<std::int64_t>(labels.size());
+  std::vector<std::int64_t> root(static_cast<std::size_t>(count));
+  std::iota(root.begin(), root.end(), 0);
+  std::function<std::int64_t(std::int64_t)> find = [&](std::int64_t c)
+  { return root[c] == c ? c : root[c] = find(root[c]); };
+  std::map<std::vector<std::int64_t>, std::int64_t> facetOwner;
+  for (std::int64_t c = 0; c < count; ++c)
+  {
+    for (int skip = 0; skip <= D; ++skip)
+    {
+      std::vector<std::int64_t> facet;
+      for (int v = 0; v <= D; ++v)
+      {
+        if (v != skip)
+        {
+          facet.push_back(cells[c * (D + 1) + v]);
+        }
+      }
+      std::sort(facet.begin(), facet.end());
+      const auto found = facetOwner.emplace(facet, c);
+      if (!found.second && labels[found.first->second] == labels[c])
+      {
+        const std::int64_t a = find(c), b = find(found.first->second);
+        root[std::max(a, b)] = std::min(a, b);
+      }
+    }
+  }
+  for (std::int64_t c = 0; c < count; ++c)
+  {
+    root[c] = find(c);
+  }
+  return root;
+}
+
+/// Connected components (through shared facets) of each label's cells.
+template <int D>
+std::map<std::int64_t, int> CellComponents(
+  const std::vector<std::int64_t>& cells, const std::vector<std::int64_t>& labels)
+{
+  const std::vector<std::int64_t> ids = CellComponentIds<D>(cells, labels);
+  std::map<std::int64_t, int> components;
+  for (std::size_t c = 0; c < ids.size(); ++c)
+  {
+    components[labels[c]] += ids[c] == static_cast<std::int64_t>(c) ? 1 : 0;
+  }
+  return components;
+}
+
+/// Per voxel, the id (0, 1, ...) of its face-connected component among the voxels of its label.
+template <int D>
+std::vector<std::int64_t> VoxelComponentIds(const LabelImage<D>& image)
+{
+  const stm::LatticeIndex<D>& dims = image.GetDimensions();
+  std::vector<std::int64_t> ids(static_cast<std::size_t>(stm::NumberOfLatticeCells<D>(dims)), -1);
+  std::int64_t next = 0;
+  ForEachIndex<D>(dims,
+    [&](const stm::LatticeIndex<D>& start)
+    {
+      if (ids[stm::LinearIndex<D>(start, dims)] >= 0)
+      {
+        return;
+      }
+      const std::int64_t label = image.At(start);
+      const std::int64_t id = next++;
+      std::vector<stm::LatticeIndex<D>> stack{ start };
+      ids[stm::LinearIndex<D>(start, dims)] = id;
+      while (!stack.empty())
+      {
+        const stm::LatticeIndex<D> voxel = stack.back();
+        stack.pop_back();
+        for (int axis = 0; axis < D; ++axis)
+        {
+          for (const int step : { -1, 1 })
+          {
+            stm::LatticeIndex<D> neighbour = voxel;
+            neighbour[axis] += step;
+            if (image.Contains(neighbour) && image.At(neighbour) == label &&
+              ids[stm::LinearIndex<D>(neighbour, dims)] < 0)
+            {
+              ids[stm::LinearIndex<D>(neighbour, dims)] = id;
+              stack.push_back(neighbour);
+            }
+          }
+        }
+      }
+    });
+  return ids;
+}
+
+/// Face-connected components of each label's voxels.
+template <int D>
+std::map<std::int64_t, int> VoxelComponents(const LabelImage<D>& image)
+{
+  const std::vector<std::int64_t> ids = VoxelComponentIds<D>(image);
+  std::map<std::int64_t, int> components;
+  std::int64_t seen = -1;
+  ForEachIndex<D>(image.GetDimensions(),
+    [&](const stm::LatticeIndex<D>& voxel)
+    {
+      const std::int64_t id = ids[stm::LinearIndex<D>(voxel, image.GetDimensions())];
+      if (id > seen) // ids are numbered in this order
+      {
+        seen = id;
+        ++components[image.At(voxel)];
+      }
+    });
+  return components;
+}
+
+/// How a cut mesh (points in voxel units, D per point) keeps the voxel components: a component
+/// is lost when no cell of its label has its centroid in one of its voxels, and split when such
+/// cells belong to more than one connected component of the mesh that lies in it alone (a mesh
+/// component reaching into two voxel components, such as the piece around the shared edge of
+/// two diagonal neighbours, splits neither).
+struct ComponentsKept
+{
+  std::int64_t Components = 0;
+  std::int64_t Lost = 0;
+  std::int64_t Split = 0;
+};
+
+template <int D>
+ComponentsKept CheckComponentsKept(const LabelImage<D>& image, const std::vector<double>& points,
+  const std::vector<std::int64_t>& cells, const std::vector<std::int64_t>& labels)
+{
+  const std::vector<std::int64_t> voxelIds = VoxelComponentIds<D>(image);
+  const std::vector<std::int64_t> cellIds = CellComponentIds<D>(cells, labels);
+  std::map<std::int64_t, std::set<std::int64_t>> pieces; // voxel component -> mesh components
+  std::map<std::int64_t, std::set<std::int64_t>> reach;  // mesh component -> voxel components
+  for (std::size_t c = 0; c < labels.size(); ++c)
+  {
+    stm::LatticeIndex<D> voxel;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      double centroid = 0.0;
+      for (int k = 0; k <= D; ++k)
+      {
+        centroid += points[cells[c * (D + 1) + k] * D + axis] / (D + 1);
+      }
+      voxel[axis] = static_cast<std::int64_t>(std::floor(centroid));
+    }
+    if (image.Contains(voxel) && image.At(voxel) == labels[c])
+    {
+      const std::int64_t component = voxelIds[stm::LinearIndex<D>(voxel, image.GetDimensions())];
+      pieces[component].insert(cellIds[c]);
+      reach[cellIds[c]].insert(component);
+    }
+  }
+  ComponentsKept kept;
+  kept.Components = *std::max_element(voxelIds.begin(), voxelIds.end()) + 1;
+  for (std::int64_t component = 0; component < kept.Components; ++component)
+  {
+    const auto found = pieces.find(component);
+    if (found == pieces.end())
+    {
+      ++kept.Lost;
+      continue;
+    }
+    const auto own = std::count_if(found->second.begin(), found->second.end(),
+      [&](std::int64_t piece) { return reach[piece].size() == 1; });
+    kept.Split += own > 1 ? 1 : 0;
+  }
+  return kept;
 }
 
 template <int D>
