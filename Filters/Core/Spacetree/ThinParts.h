@@ -183,42 +183,56 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
     return Status::Aborted();
   }
 
-  // Face-connected components of each material (union by smaller root), and whether any voxel
-  // of a component keeps it at its centre.
-  std::vector<std::int64_t> root(static_cast<std::size_t>(voxelCount));
-  for (std::int64_t v = 0; v < voxelCount; ++v)
+  // Whether each voxel's face-connected component has a voxel that keeps it: a search from each
+  // voxel that does not, stopped at the first voxel that does (most components reach one
+  // within a step or two; only components that have none are walked whole).
+  std::vector<std::uint8_t> componentKept = centreKept; // 1: kept, 0: unknown, 2: not kept
+  std::vector<std::int64_t> visited, stack;
+  for (std::int64_t start = 0; start < voxelCount; ++start)
   {
-    root[v] = v;
-  }
-  auto find = [&root](std::int64_t v)
-  {
-    while (root[v] != v)
+    if (componentKept[start] != 0)
     {
-      root[v] = root[root[v]];
-      v = root[v];
+      continue;
     }
-    return v;
-  };
-  for (std::int64_t v = 0; v < voxelCount; ++v)
-  {
-    const LatticeIndex<Dim> voxel = unlinear(v, image.Dimensions);
-    const std::int32_t own = materialAt(voxel);
-    for (int axis = 0; axis < Dim; ++axis)
+    const std::int32_t own = materialAt(unlinear(start, image.Dimensions));
+    visited.assign(1, start);
+    stack.assign(1, start);
+    componentKept[start] = 2;
+    bool found = false;
+    while (!stack.empty() && !found)
     {
-      LatticeIndex<Dim> previous = voxel;
-      previous[axis] -= 1;
-      if (previous[axis] >= 0 && materialAt(previous) == own)
+      const LatticeIndex<Dim> voxel = unlinear(stack.back(), image.Dimensions);
+      stack.pop_back();
+      for (int axis = 0; axis < Dim && !found; ++axis)
       {
-        const std::int64_t a = find(v), b = find(LinearIndex<Dim>(previous, image.Dimensions));
-        root[std::max(a, b)] = std::min(a, b);
+        for (const int step : { -1, 1 })
+        {
+          LatticeIndex<Dim> neighbour = voxel;
+          neighbour[axis] += step;
+          if (neighbour[axis] < 0 || neighbour[axis] >= image.Dimensions[axis] ||
+            materialAt(neighbour) != own)
+          {
+            continue;
+          }
+          const std::int64_t index = LinearIndex<Dim>(neighbour, image.Dimensions);
+          if (componentKept[index] == 1)
+          {
+            found = true;
+            break;
+          }
+          if (componentKept[index] == 0)
+          {
+            componentKept[index] = 2;
+            visited.push_back(index);
+            stack.push_back(index);
+          }
+        }
       }
     }
-  }
-  std::vector<std::uint8_t> componentKept(static_cast<std::size_t>(voxelCount), 0);
-  for (std::int64_t v = 0; v < voxelCount; ++v)
-  {
-    root[v] = find(v);
-    componentKept[root[v]] |= centreKept[v];
+    for (const std::int64_t index : visited)
+    {
+      componentKept[index] = found ? 1 : 2;
+    }
   }
   std::vector<std::uint8_t>().swap(centreKept);
 
@@ -231,7 +245,6 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
     const LatticeIndex<Dim>* Dimensions;
     const LatticeIndex<Dim>* Corners;
     const std::int32_t* Majority;
-    const std::int64_t* Root;
     const std::uint8_t* ComponentKept;
     std::uint8_t* Thin;
     void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
@@ -242,7 +255,7 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
         const std::int32_t own = (*this->MaterialAt)(voxel);
         auto majorityAt = [&](const LatticeIndex<Dim>& corner)
         { return this->Majority[LinearIndex<Dim>(corner, *this->Corners)]; };
-        const bool kept = this->ComponentKept[this->Root[v]] != 0; // (a)
+        const bool kept = this->ComponentKept[v] == 1; // (a)
         bool joined = true; // (b): every face to a same-material neighbour has such a corner
         for (int axis = 0; axis < Dim && kept && joined; ++axis)
         {
@@ -277,7 +290,7 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
     }
   };
   ThinKernel thinKernel{ &materialAt, &unlinear, &image.Dimensions, &corners, majority.data(),
-    root.data(), componentKept.data(), thin.data() };
+    componentKept.data(), thin.data() };
   executor.For(0, voxelCount, 1 << 14, thinKernel);
   return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
 }
