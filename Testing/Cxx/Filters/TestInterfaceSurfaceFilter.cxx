@@ -182,12 +182,7 @@ TEST(InterfaceSurfaceFilter, TwoDimensionalSliceGivesLines)
 TEST(InterfaceSurfaceFilter, BadInputGetsClearErrors)
 {
   const auto check = stmTest::ExpectErrorAndEmptyOutput;
-  const int dims[3] = { 8, 8, 8 };
-  const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
-  auto image = stmTest::MakeLabelImage(
-    dims, spacing, origin, [](int i, int j, int k) { return i > 2 && j > 2 && k > 3 ? 1 : 2; });
-  vtkNew<stmImageToSpacetree> tree;
-  tree->SetInputData(image);
+  auto tree = stmTest::BadInputTree(2);
   tree->Update();
   { // hexahedra
     vtkNew<stmInterfaceSurface> interfaces;

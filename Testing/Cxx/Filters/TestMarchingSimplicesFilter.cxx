@@ -297,12 +297,7 @@ TEST(MarchingSimplicesFilter, TwoDimensionalDiskAndOneSide)
 TEST(MarchingSimplicesFilter, BadInputGetsClearErrors)
 {
   const auto check = stmTest::ExpectErrorAndEmptyOutput;
-  const int dims[3] = { 8, 8, 8 };
-  const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
-  auto image = stmTest::MakeLabelImage(
-    dims, spacing, origin, [](int i, int j, int k) { return i > 2 && j > 2 && k > 3 ? 1 : 0; });
-  vtkNew<stmImageToSpacetree> tree;
-  tree->SetInputData(image);
+  auto tree = stmTest::BadInputTree(0);
   vtkNew<stmSpacetreeTessellate> hybrid;
   hybrid->SetInputConnection(tree->GetOutputPort());
   hybrid->SetOutputType(stmSpacetreeTessellate::HYBRID);

@@ -99,6 +99,19 @@ inline vtkSmartPointer<vtkImageData> MakeLabelImage(const int dims[3], const dou
   return image;
 }
 
+/// The spacetree (not updated) of the bad-input tests' image: 8^3 voxels of 1 mm, a box of label 1
+/// in `outside` (0: the background; another label: two materials).
+inline vtkSmartPointer<stmImageToSpacetree> BadInputTree(int outside)
+{
+  const int dims[3] = { 8, 8, 8 };
+  const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
+  auto image = MakeLabelImage(dims, spacing, origin,
+    [outside](int i, int j, int k) { return i > 2 && j > 2 && k > 3 ? 1 : outside; });
+  auto tree = vtkSmartPointer<stmImageToSpacetree>::New();
+  tree->SetInputData(image);
+  return tree;
+}
+
 /// Nested ellipsoids: 2 inside 1 inside background, plus a small separate ball of label 5.
 inline int NestedEllipsoids(int i, int j, int k, const int dims[3])
 {
