@@ -19,8 +19,10 @@
 #include "vtkDataObject.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
+#include "vtkNew.h"
 #include "vtkPointData.h"
 #include "vtkSMPTools.h"
+#include "vtkSmartPointer.h"
 #include "vtkTypeInt32Array.h"
 #include "vtkTypeInt64Array.h"
 #include "vtkUnsignedCharArray.h"
@@ -47,6 +49,37 @@ auto DispatchSimplices(vtkCellArray* cells, int dimension, Run&& run)
   }
   const vtkTypeInt32* ids = cells->GetConnectivityArray32()->GetPointer(0);
   return dimension == 3 ? run(Three(), ids) : run(Two(), ids);
+}
+
+/// A cell array of cells with `corners` points each from their point ids (any integer type),
+/// stored with OutId ids (32- or 64-bit), filled in parallel.
+template <class OutId, class SourceId>
+vtkSmartPointer<vtkCellArray> FixedSizeCells(const std::vector<SourceId>& ids, int corners)
+{
+  using Storage =
+    typename std::conditional<sizeof(OutId) == 4, vtkTypeInt32Array, vtkTypeInt64Array>::type;
+  using Value = typename Storage::ValueType;
+  const auto cells = static_cast<vtkIdType>(ids.size()) / corners;
+  vtkNew<Storage> offsets, connectivity;
+  offsets->SetNumberOfValues(cells + 1);
+  connectivity->SetNumberOfValues(static_cast<vtkIdType>(ids.size()));
+  Value* offsetValues = offsets->GetPointer(0);
+  Value* idValues = connectivity->GetPointer(0);
+  vtkSMPTools::For(0, cells + 1,
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      for (vtkIdType c = begin; c < end; ++c)
+      {
+        offsetValues[c] = static_cast<Value>(c * corners);
+        for (int k = 0; k < corners && c < cells; ++k)
+        {
+          idValues[c * corners + k] = static_cast<Value>(ids[c * corners + k]);
+        }
+      }
+    });
+  vtkNew<vtkCellArray> cellArray;
+  cellArray->SetData(offsets, connectivity);
+  return cellArray;
 }
 
 /// The cell array "Material" as 64-bit integers (in parallel); empty without it.

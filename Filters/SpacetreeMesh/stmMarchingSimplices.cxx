@@ -147,27 +147,6 @@ void AssemblePoints(vtkPointSet* input, const std::vector<stm::CutEdge>& edges,
   }
 }
 
-template <class IdType>
-vtkSmartPointer<vtkCellArray> MakeCellArray(std::vector<IdType>& connectivity, int pointsPerCell)
-{
-  using Storage =
-    typename std::conditional<sizeof(IdType) == 4, vtkTypeInt32Array, vtkTypeInt64Array>::type;
-  const vtkIdType cells = static_cast<vtkIdType>(connectivity.size()) / pointsPerCell;
-  vtkNew<Storage> offsets;
-  offsets->SetNumberOfValues(cells + 1);
-  for (vtkIdType c = 0; c <= cells; ++c)
-  {
-    offsets->SetValue(c, static_cast<IdType>(c * pointsPerCell));
-  }
-  vtkNew<Storage> ids;
-  ids->SetNumberOfValues(static_cast<vtkIdType>(connectivity.size()));
-  std::copy(connectivity.begin(), connectivity.end(), ids->GetPointer(0));
-  std::vector<IdType>().swap(connectivity);
-  vtkNew<vtkCellArray> cellArray;
-  cellArray->SetData(offsets, ids);
-  return cellArray;
-}
-
 struct CutRequest
 {
   stmMarchingSimplices* Filter;
@@ -237,8 +216,11 @@ stm::Status CutVolume(CutRequest& request, stm::MarchingSimplices<Dim>& cutter,
   AssemblePoints(
     input, cutter.GetCutEdges(), selection, request.FunctionName, request.Options.IsoValue, output);
 
-  vtkSmartPointer<vtkCellArray> cellArray =
-    fits32 ? MakeCellArray(ids32, Dim + 1) : MakeCellArray(ids64, Dim + 1);
+  vtkSmartPointer<vtkCellArray> cellArray = fits32
+    ? stmCutInput::FixedSizeCells<std::int32_t>(ids32, Dim + 1)
+    : stmCutInput::FixedSizeCells<std::int64_t>(ids64, Dim + 1);
+  std::vector<std::int32_t>().swap(ids32);
+  std::vector<std::int64_t>().swap(ids64);
   output->SetCells(Dim == 3 ? VTK_TETRA : VTK_TRIANGLE, cellArray);
 
   // Cell data from the parents; Material becomes the side's label.
@@ -347,7 +329,8 @@ stm::Status CutSurface(CutRequest& request, stm::MarchingSimplices<Dim>& cutter,
     }
     outCD->SetNormals(normals);
   }
-  vtkSmartPointer<vtkCellArray> cellArray = MakeCellArray(facets, Dim);
+  vtkSmartPointer<vtkCellArray> cellArray = stmCutInput::FixedSizeCells<std::int64_t>(facets, Dim);
+  std::vector<std::int64_t>().swap(facets);
   if (Dim == 3)
   {
     output->SetPolys(cellArray);

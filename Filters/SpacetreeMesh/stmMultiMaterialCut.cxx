@@ -45,35 +45,6 @@ std::vector<std::int64_t> PeelingOrder(std::vector<std::int64_t> labels, std::in
   return labels;
 }
 
-template <class OutId>
-vtkSmartPointer<vtkCellArray> SimplexCells(const std::vector<std::int64_t>& ids, int corners)
-{
-  using Storage =
-    typename std::conditional<sizeof(OutId) == 4, vtkTypeInt32Array, vtkTypeInt64Array>::type;
-  const auto cells = static_cast<vtkIdType>(ids.size()) / corners;
-  vtkNew<Storage> offsets, connectivity;
-  offsets->SetNumberOfValues(cells + 1);
-  connectivity->SetNumberOfValues(static_cast<vtkIdType>(ids.size()));
-  auto* offsetValues = offsets->GetPointer(0);
-  auto* idValues = connectivity->GetPointer(0);
-  vtkSMPTools::For(0, cells + 1,
-    [&](vtkIdType begin, vtkIdType end)
-    {
-      for (vtkIdType c = begin; c < end; ++c)
-      {
-        offsetValues[c] = static_cast<typename Storage::ValueType>(c * corners);
-        for (int k = 0; k < corners && c < cells; ++k)
-        {
-          idValues[c * corners + k] =
-            static_cast<typename Storage::ValueType>(ids[c * corners + k]);
-        }
-      }
-    });
-  vtkNew<vtkCellArray> cellArray;
-  cellArray->SetData(offsets, connectivity);
-  return cellArray;
-}
-
 struct CutResult
 {
   int Materials = 0;
@@ -200,8 +171,8 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
   const bool fits32 = total < std::numeric_limits<std::int32_t>::max() &&
     cells * (Dim + 1) < std::numeric_limits<std::int32_t>::max();
   output->SetCells(Dim == 3 ? VTK_TETRA : VTK_TRIANGLE,
-    fits32 ? SimplexCells<std::int32_t>(cellIds, Dim + 1)
-           : SimplexCells<std::int64_t>(cellIds, Dim + 1));
+    fits32 ? stmCutInput::FixedSizeCells<std::int32_t>(cellIds, Dim + 1)
+           : stmCutInput::FixedSizeCells<std::int64_t>(cellIds, Dim + 1));
 
   vtkCellData* inCD = input->GetCellData();
   vtkCellData* outCD = output->GetCellData();
