@@ -156,6 +156,15 @@ def load_summary(path):
         return json.load(summary_file)
 
 
+def smooth_line(smooth):
+    """The smooth stage's figures as stmesh prints them."""
+    line = "smooth: %d moved points, %d rejected moves" % (smooth["moved_points"],
+                                                          smooth["rejected_moves"])
+    if smooth["improved_points"] > 0:
+        line += ", %d quality improvement moves" % smooth["improved_points"]
+    return line
+
+
 def stage(summary, name):
     matches = [entry for entry in summary["stages"] if entry["name"] == name]
     check(len(matches) == 1, "summary has %d stages named %s" % (len(matches), name))
@@ -1637,10 +1646,10 @@ def cut_run(c, image, name, arguments, inside=1, extension=".vtu"):
         check(line in out.splitlines(), "%s: stdout lacks the line %r" % (name, line))
     if smoothed:
         check(isinstance(smooth["moved_points"], int) and smooth["moved_points"] >= 0 and
-              isinstance(smooth["rejected_moves"], int) and smooth["rejected_moves"] >= 0,
+              isinstance(smooth["rejected_moves"], int) and smooth["rejected_moves"] >= 0 and
+              isinstance(smooth["improved_points"], int) and smooth["improved_points"] >= 0,
               "%s: bad smooth figures %s" % (name, smooth))
-        line = "smooth: %d moved points, %d rejected moves" % (smooth["moved_points"],
-                                                              smooth["rejected_moves"])
+        line = smooth_line(smooth)
         check(line in out.splitlines(), "%s: stdout lacks the line %r" % (name, line))
     layers = tessellate["boundary_layers"]
     check(("; %d boundary layer%s" % (layers, "" if layers == 1 else "s")) in out,
@@ -1783,9 +1792,8 @@ def case_cut_surface(c):
     check(summary.get("triangles_per_original_material") == counts,
           "triangles_per_original_material %s, the file has %s" %
           (summary.get("triangles_per_original_material"), counts))
-    check("smooth: %d moved points, %d rejected moves; a surface of %d triangles" %
-          (smooth["moved_points"], smooth["rejected_moves"], smooth["cells"]) in out.splitlines(),
-          "stdout lacks the smooth line")
+    check(smooth_line(smooth) + "; a surface of %d triangles" % smooth["cells"]
+          in out.splitlines(), "stdout lacks the smooth line")
     check_closed_and_oriented(surface, "surface.vtp")
     # Oriented outward, it encloses exactly the inside of the (smoothed) volume output: the
     # surface is the smoothed interface, not a new cut.

@@ -303,8 +303,8 @@ Arguments:
                         points, the cells per type, the boundary layers and, for hybrid and
                         leaves output, the volume fraction of the hexahedra; for snap the
                         snapped points and the refused snaps; for cut the split cells, the cut
-                        points and the inside and outside cells; for smooth the moved points
-                        and the rejected moves), the
+                        points and the inside and outside cells; for smooth the moved points,
+                        the rejected moves and the quality improvement moves), the
                         spacetree's cell size per level (in voxels) and the per-material counts
                         as JSON.
   --compressor C        compression of .vtu and .vtp files: lz4 (the default, fastest), zlib
@@ -1947,6 +1947,7 @@ struct StageReport
   bool Smooth = false;
   long long MovedPoints = -1;
   long long RejectedMoves = -1;
+  long long ImprovedPoints = -1;
   long long SurfaceCells = -1;
 };
 
@@ -3107,6 +3108,10 @@ void PrintTable(const std::vector<StageReport>& stages, double totalSeconds)
     }
     std::cout << stage.Name << ": " << stage.MovedPoints << " moved points, " << stage.RejectedMoves
               << " rejected moves";
+    if (stage.ImprovedPoints > 0)
+    {
+      std::cout << ", " << stage.ImprovedPoints << " quality improvement moves";
+    }
     if (stage.SurfaceCells >= 0)
     {
       std::cout << "; a surface of " << stage.SurfaceCells << ' '
@@ -3481,7 +3486,8 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
     if (stage.Smooth)
     {
       json << ", \"moved_points\": " << JsonCount(stage.MovedPoints)
-           << ", \"rejected_moves\": " << JsonCount(stage.RejectedMoves);
+           << ", \"rejected_moves\": " << JsonCount(stage.RejectedMoves)
+           << ", \"improved_points\": " << JsonCount(stage.ImprovedPoints);
       if (stage.SurfaceCells >= 0)
       {
         json << ", \"surface_cells\": " << stage.SurfaceCells;
@@ -3886,6 +3892,9 @@ vtkSmartPointer<vtkPointSet> RunSmooth(vtkSmartPointer<vtkUnstructuredGrid> grid
   smooth->SetNumberOfIterations(options.SmoothIterations);
   smooth->SetMethod(options.SmoothMethod);
   smooth->SetBackgroundMaterial(0); // the cut's outside
+  // Every label its own material: each gets back its voxels' volume, which the junction lines
+  // of the cut cost the small labels.
+  smooth->SetRestoreOriginalVolumes(options.SeparateMaterials);
   if (source.Sphere && options.IsoValue == 0)
   {
     // The sphere's zero set; with --iso the surface is another sphere, which vtkSphere is not.
@@ -3896,6 +3905,7 @@ vtkSmartPointer<vtkPointSet> RunSmooth(vtkSmartPointer<vtkUnstructuredGrid> grid
   report.Smooth = true;
   report.MovedPoints = static_cast<long long>(smooth->GetNumberOfMovedPoints());
   report.RejectedMoves = static_cast<long long>(smooth->GetNumberOfRejectedMoves());
+  report.ImprovedPoints = static_cast<long long>(smooth->GetNumberOfImprovedPoints());
   if (!options.WritesSurface() && options.KeepSide == stmMarchingSimplices::BOTH)
   {
     return grid;

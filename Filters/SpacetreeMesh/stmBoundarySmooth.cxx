@@ -13,6 +13,7 @@
 #include "vtkCellType.h"
 #include "vtkDataArray.h"
 #include "vtkDoubleArray.h"
+#include "vtkFieldData.h"
 #include "vtkIdList.h"
 #include "vtkImplicitFunction.h"
 #include "vtkInformation.h"
@@ -60,6 +61,11 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
   const stmPlaneFrame& frame = request.Coordinates;
   std::vector<double> local = frame.CoreCoordinates<Dim>(inputPoints);
   const std::vector<std::int64_t> materials = stmCutInput::CellMaterials(input);
+  const std::vector<std::int64_t> originals =
+    request.Filter->GetRestoreOriginalVolumes() && request.Options.TargetVolumes.empty()
+    ? stmCutInput::CellMaterials(input, "OriginalMaterial")
+    : std::vector<std::int64_t>();
+  request.Options.VolumeTargetMaterials = originals.empty() ? nullptr : originals.data();
 
   // The projector: Newton steps onto f = 0 of the implicit function, in the frame. VTK's
   // implicit functions may update a transform when evaluated, so evaluations are serialised.
@@ -178,6 +184,9 @@ void stmBoundarySmooth::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfInteriorLayers: " << this->NumberOfInteriorLayers << "\n";
   os << indent << "MaxConditionNumber: " << this->MaxConditionNumber << "\n";
   os << indent << "MinDihedralAngle: " << this->MinDihedralAngle << "\n";
+  os << indent << "NumberOfImprovementSweeps: " << this->NumberOfImprovementSweeps << "\n";
+  os << indent << "RestoreOriginalVolumes: " << (this->RestoreOriginalVolumes ? "On" : "Off")
+     << "\n";
   os << indent << "BackgroundMaterial: " << this->BackgroundMaterial << "\n";
   os << indent << "ProjectToFunction: " << (this->ProjectToFunction ? "On" : "Off") << "\n";
   os << indent << "ImplicitFunction: " << (this->ImplicitFunction ? "" : "(none)\n");
@@ -188,6 +197,9 @@ void stmBoundarySmooth::PrintSelf(ostream& os, vtkIndent indent)
   }
   os << indent << "NumberOfMovedPoints: " << this->NumberOfMovedPoints << "\n";
   os << indent << "NumberOfRejectedMoves: " << this->NumberOfRejectedMoves << "\n";
+  os << indent << "NumberOfImprovedPoints: " << this->NumberOfImprovedPoints << "\n";
+  os << indent << "LargestVolumeErrorBefore: " << this->LargestVolumeErrorBefore << "\n";
+  os << indent << "LargestVolumeErrorAfter: " << this->LargestVolumeErrorAfter << "\n";
 }
 
 vtkMTimeType stmBoundarySmooth::GetMTime()
@@ -207,6 +219,9 @@ int stmBoundarySmooth::RequestData(
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
   this->NumberOfMovedPoints = 0;
   this->NumberOfRejectedMoves = 0;
+  this->NumberOfImprovedPoints = 0;
+  this->LargestVolumeErrorBefore = 0.0;
+  this->LargestVolumeErrorAfter = 0.0;
   output->Initialize();
   auto fail = [&](const std::string& message)
   {
@@ -247,6 +262,18 @@ int stmBoundarySmooth::RequestData(
   {
     return fail("ProjectToFunction is on but no ImplicitFunction is set");
   }
+  // The targets of RestoreOriginalVolumes: stmMultiMaterialCut's volumes per material before
+  // its snapping moved points, else the volumes of the input cells per OriginalMaterial.
+  vtkDataArray* targetVolumes = input->GetFieldData()->GetArray("OriginalMaterialVolumes");
+  targetVolumes =
+    targetVolumes && targetVolumes->GetNumberOfComponents() == 2 ? targetVolumes : nullptr;
+  if (this->RestoreOriginalVolumes &&
+    !(input->GetCellData()->GetArray("Material") &&
+      (targetVolumes || input->GetCellData()->GetArray("OriginalMaterial"))))
+  {
+    return fail("RestoreOriginalVolumes needs the cell array Material, and the field array "
+                "OriginalMaterialVolumes or the cell array OriginalMaterial");
+  }
 
   SmoothRequest request{ this, input, output, {},
     this->ProjectToFunction ? this->ImplicitFunction : nullptr, {}, {} };
@@ -259,6 +286,13 @@ int stmBoundarySmooth::RequestData(
   request.Options.NumberOfInteriorLayers = this->NumberOfInteriorLayers;
   request.Options.MaxConditionNumber = this->MaxConditionNumber;
   request.Options.MinDihedralAngle = this->MinDihedralAngle;
+  request.Options.NumberOfImprovementSweeps = this->NumberOfImprovementSweeps;
+  for (vtkIdType t = 0;
+       this->RestoreOriginalVolumes && targetVolumes && t < targetVolumes->GetNumberOfTuples(); ++t)
+  {
+    request.Options.TargetVolumes[static_cast<std::int64_t>(targetVolumes->GetComponent(t, 0))] =
+      targetVolumes->GetComponent(t, 1);
+  }
   request.Options.BackgroundMaterial = this->BackgroundMaterial;
   std::string problem;
   if (!request.Coordinates.Build(input, dimension,
@@ -286,6 +320,9 @@ int stmBoundarySmooth::RequestData(
   }
   this->NumberOfMovedPoints = static_cast<vtkIdType>(request.Stats.MovedPoints);
   this->NumberOfRejectedMoves = static_cast<vtkIdType>(request.Stats.RejectedMoves);
+  this->NumberOfImprovedPoints = static_cast<vtkIdType>(request.Stats.ImprovedPoints);
+  this->LargestVolumeErrorBefore = request.Stats.LargestVolumeErrorBefore;
+  this->LargestVolumeErrorAfter = request.Stats.LargestVolumeErrorAfter;
   this->UpdateProgress(1.0);
   return 1;
 }

@@ -20,6 +20,10 @@
  * length, else the point stays. The worst element of the mesh therefore never gets worse.
  * Optionally, moves are limited to MaxDisplacement from the original position, and surface
  * points are projected onto the zero level of ImplicitFunction (ProjectToFunction).
+ * Optionally (RestoreOriginalVolumes), the interfaces then move along their normals to give
+ * every material back its original volume. Last, NumberOfImprovementSweeps sweeps move the
+ * points of the cells still beyond the quality bounds to improve them, in the directions that
+ * keep every material's volume (along interfaces and junction lines).
  *
  * Input: a vtkUnstructuredGrid of only tetrahedra (3D) or only triangles in a plane (2D), e.g.
  * the output of stmMarchingSimplices, with the cell array "Material" (without it, every cell is
@@ -129,6 +133,35 @@ public:
 
   ///@{
   /**
+   * Sweeps of the quality improvement after the iterations: the surface and interior-layer
+   * points of cells beyond MaxConditionNumber or MinDihedralAngle move to improve their worst
+   * cell, in the directions that keep every material's volume to first order (an interface
+   * point in its tangent plane, a junction-line point along its line, a quadruple point not at
+   * all). 2D and 3D meshes; 0 turns it off. In [0, 100]; default 10.
+   */
+  vtkSetClampMacro(NumberOfImprovementSweeps, int, 0, 100);
+  vtkGetMacro(NumberOfImprovementSweeps, int);
+  ///@}
+
+  ///@{
+  /**
+   * Whether, after the iterations, the interfaces move along their normals so that every
+   * material gets back its original volume: the field array "OriginalMaterialVolumes" (pairs
+   * of material and volume, which stmMultiMaterialCut writes: each material's volume before
+   * the cut and its snapping, after a spacetree its voxels' volume), or without it the volume
+   * of the input cells whose "OriginalMaterial" is that material. The points between exactly two
+   * materials (the outside counting as one) move, by a per-material offset solved from the
+   * volume errors (rounds until every material is within 0.01% of its target, at most ten; each
+   * move validated like a smoothing move); junction points stay; the background takes up the
+   * difference. Needs the cell array "Material". Default off.
+   */
+  vtkSetMacro(RestoreOriginalVolumes, bool);
+  vtkGetMacro(RestoreOriginalVolumes, bool);
+  vtkBooleanMacro(RestoreOriginalVolumes, bool);
+  ///@}
+
+  ///@{
+  /**
    * The "Material" of the background: its cells' outer-boundary points stay fixed and its
    * outer-boundary facets are no surface. Default 0.
    */
@@ -156,11 +189,21 @@ public:
   ///@}
 
   /**
-   * Results of the last update: points whose position changed, and moves rejected (the point
-   * stayed, after the half and quarter moves were rejected too).
+   * Results of the last update: points whose position changed, moves rejected (the point
+   * stayed, after the half and quarter moves were rejected too), and points the quality
+   * improvement moved (once per sweep).
    */
   vtkGetMacro(NumberOfMovedPoints, vtkIdType);
   vtkGetMacro(NumberOfRejectedMoves, vtkIdType);
+  vtkGetMacro(NumberOfImprovedPoints, vtkIdType);
+
+  /**
+   * Results of the last update with RestoreOriginalVolumes: the largest relative difference of
+   * a material's volume from the volume of its original cells, before and after the
+   * restoration (0 without it).
+   */
+  vtkGetMacro(LargestVolumeErrorBefore, double);
+  vtkGetMacro(LargestVolumeErrorAfter, double);
 
   /**
    * Also the implicit function's modification time.
@@ -186,11 +229,16 @@ private:
   int NumberOfInteriorLayers = 2;
   double MaxConditionNumber = 3.5;
   double MinDihedralAngle = 15.0;
+  int NumberOfImprovementSweeps = 10;
+  bool RestoreOriginalVolumes = false;
   int BackgroundMaterial = 0;
   bool ProjectToFunction = false;
   vtkImplicitFunction* ImplicitFunction = nullptr;
   vtkIdType NumberOfMovedPoints = 0;
   vtkIdType NumberOfRejectedMoves = 0;
+  vtkIdType NumberOfImprovedPoints = 0;
+  double LargestVolumeErrorBefore = 0.0;
+  double LargestVolumeErrorAfter = 0.0;
 };
 
 #endif

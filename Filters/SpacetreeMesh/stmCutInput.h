@@ -82,11 +82,13 @@ vtkSmartPointer<vtkCellArray> FixedSizeCells(const std::vector<SourceId>& ids, i
   return cellArray;
 }
 
-/// The cell array "Material" as 64-bit integers (in parallel); empty without it.
-inline std::vector<std::int64_t> CellMaterials(vtkUnstructuredGrid* input)
+/// The cell array `name` ("Material" by default) as 64-bit integers (in parallel); empty
+/// without it.
+inline std::vector<std::int64_t> CellMaterials(
+  vtkUnstructuredGrid* input, const char* name = "Material")
 {
   std::vector<std::int64_t> materials;
-  vtkDataArray* material = input->GetCellData()->GetArray("Material");
+  vtkDataArray* material = input->GetCellData()->GetArray(name);
   if (!material)
   {
     return materials;

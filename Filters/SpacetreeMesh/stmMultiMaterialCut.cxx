@@ -11,6 +11,7 @@
 #include "vtkCellData.h"
 #include "vtkDataArray.h"
 #include "vtkDoubleArray.h"
+#include "vtkFieldData.h"
 #include "vtkIdList.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
@@ -97,13 +98,13 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
     return status;
   }
   executor.SetProgressRange(0.15, 0.85);
-  std::vector<double> core;
-  if (options.SnapVertices)
-  {
-    core = frame.CoreCoordinates<Dim>(inputPoints);
-  }
+  std::vector<double> core = frame.CoreCoordinates<Dim>(inputPoints);
+  // The input's volume per material, before snapping moves points: what BoundarySmooth's
+  // RestoreOriginalVolumes gives back to each material.
+  const std::vector<double> inputVolumes =
+    stm::VolumePerMaterial<Dim>(core.data(), connectivity, numberOfCells, materials.data(), count);
   stm::MultiMaterialCut<Dim> cut;
-  status = cut.Run(numberOfPoints, core.empty() ? nullptr : core.data(), connectivity,
+  status = cut.Run(numberOfPoints, options.SnapVertices ? core.data() : nullptr, connectivity,
     numberOfCells, materials.data(), count, std::move(fractions), options, executor);
   std::vector<double>().swap(core);
   if (!status.IsOk())
@@ -191,6 +192,19 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
   {
     original->SetName("OriginalMaterial");
   }
+  vtkNew<vtkDoubleArray> volumes;
+  volumes->SetName("OriginalMaterialVolumes");
+  volumes->SetNumberOfComponents(2);
+  volumes->SetComponentName(0, "Material");
+  volumes->SetComponentName(1, "Volume");
+  for (int m = 0; m < count; ++m)
+  {
+    if (inputVolumes[m] > 0.0)
+    {
+      volumes->InsertNextTuple2(static_cast<double>(order[m]), inputVolumes[m]);
+    }
+  }
+  output->GetFieldData()->AddArray(volumes);
   vtkNew<vtkIntArray> material;
   material->SetName("Material");
   material->SetNumberOfValues(cells);

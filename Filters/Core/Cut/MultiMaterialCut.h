@@ -32,6 +32,7 @@
 // material already peeled and m_k is present at one of its points; so thin layers of either
 // side are kept.
 
+#include "../Common/Determinant.h"
 #include "../Common/Execution.h"
 #include "../Common/PointCells.h"
 #include "../Common/Status.h"
@@ -372,6 +373,35 @@ struct MultiMaterialCutOptions
     return snap;
   }
 };
+
+/// The volume (area in 2D) of the simplices of each material index (0 to K - 1), in cell order.
+template <int Dim, class IdType, class MaterialType>
+std::vector<double> VolumePerMaterial(const double* points, const IdType* connectivity,
+  std::int64_t numberOfCells, const MaterialType* materials, int numberOfMaterials)
+{
+  std::vector<double> volumes(static_cast<std::size_t>(numberOfMaterials), 0.0);
+  double factorial = 1.0;
+  for (int k = 2; k <= Dim; ++k)
+  {
+    factorial *= k;
+  }
+  for (std::int64_t c = 0; c < numberOfCells; ++c)
+  {
+    const IdType* ids = connectivity + c * (Dim + 1);
+    double edges[Dim][Dim];
+    for (int col = 0; col < Dim; ++col)
+    {
+      for (int r = 0; r < Dim; ++r)
+      {
+        edges[r][col] = points[static_cast<std::int64_t>(ids[col + 1]) * Dim + r] -
+          points[static_cast<std::int64_t>(ids[0]) * Dim + r];
+      }
+    }
+    volumes[static_cast<std::size_t>(materials[c])] +=
+      std::abs(Determinant<Dim>(edges)) / factorial;
+  }
+  return volumes;
+}
 
 /// Counts of one run.
 struct MultiMaterialCutCounts

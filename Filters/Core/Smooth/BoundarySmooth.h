@@ -60,6 +60,38 @@
 //   that are neither surface nor fixed; after each surface iteration, one volumetric Laplacian
 //   pass (lambda toward the centroid of all edge neighbours) with the same validation, which
 //   restores the quality that surface moves cost (the paper's experience).
+// - Volume restoration (issue 7), with target volumes (TargetVolumes, or the input volumes of
+//   the cells per VolumeTargetMaterials): after the iterations, the surface points between
+//   exactly two materials (the outside counting as one; junction points stay) move along the
+//   gradient g of the first material's volume, by (lambda_a - lambda_b) g for the pair (a, b).
+//   To first order that changes a's volume by the sum of (lambda_a - lambda_b) |g|^2 over its
+//   interface points: a graph Laplacian in the lambdas of the materials with a target, the
+//   background and the outside held at 0, which conjugate gradients solve for the volume
+//   errors (the smallest displacement that corrects them to first order). The moves are
+//   validated like smoothing moves, and rounds repeat until every material is within
+//   VolumeTolerance of its target (at most NumberOfVolumeRounds). Why: the multi-material cut
+//   gives a junction line to the material that holds half of its voxels, which costs small
+//   labels up to 4% of their volume (docs/multi-material.md); restoring each label's voxel
+//   volume spreads that over its whole interface (AAL: 5 of 114 labels over 2% -> none over
+//   0.01%, two rounds).
+// - Quality improvement (issue 7): after the iterations (and the restoration), up to
+// NumberOfImprovementSweeps sweeps
+//   move the smoothable points (surface and interior-layer points) of the cells beyond the
+//   bounds (condition above MaxConditionNumber or dihedral angle below MinDihedralAngle) to
+//   lower the worst "badness" of their incident cells, max(condition / MaxConditionNumber,
+//   MinDihedralAngle / angle), under the same validation as a smoothing move. A point moves
+//   only in the directions that keep the volume of every material around it, and the body's
+//   on the outer boundary, to first order: the complement of the gradients of those volumes at
+//   the point. So an interior-layer point moves freely, an interface point in its tangent
+//   plane, a junction-line point along its line, and a quadruple point not at all; where the
+//   gradients have lower rank than the materials require (a folded interface) the point does
+//   not move. The search is a compass search over every combination of -1, 0 and 1 times those
+//   directions, from a fifth of the point's shortest edge down to 1/256 of it, within 0.6 of
+//   that edge per sweep. The points of a sweep are coloured greedily, so the result does not
+//   depend on the number of threads. The slivers of a multi-material cut sit between junction
+//   lines where the smoothing's targets do not help (AAL, 116 labels: worst condition number
+//   10.7 -> 5.1, smallest dihedral angle 5.7 -> 11.5 degrees). Only in 2D and 3D: the bounds
+//   are those of triangles and tetrahedra, and the 4D measure is too costly for a search.
 // - SinglePrecision rounds every tentative position to float before validating it, so that a
 //   float point array receives exactly the positions that were validated.
 
@@ -106,6 +138,17 @@ struct BoundarySmoothOptions
   /// Quality bounds of the move validation (see the header's comment), >= 1 and in [0, 180).
   double MaxConditionNumber = 3.5;
   double MinDihedralAngle = 15.0;
+  /// Sweeps of the quality improvement after the iterations (header comment), >= 0.
+  int NumberOfImprovementSweeps = 10;
+  /// Volume restoration (header comment), which needs materials: the target volume per
+  /// material, or when that is empty, per cell the material whose target volume the cell's
+  /// input volume counts toward (e.g. its material before a cut; nullptr: no restoration).
+  std::map<std::int64_t, double> TargetVolumes;
+  const std::int64_t* VolumeTargetMaterials = nullptr;
+  /// Most rounds of the volume restoration, >= 0; it stops once every material is within
+  /// VolumeTolerance (relative, >= 0) of its target.
+  int NumberOfVolumeRounds = 10;
+  double VolumeTolerance = 1e-4;
   /// Cells of this material on the outer boundary hold their boundary points fixed.
   std::int64_t BackgroundMaterial = 0;
   /// Rounds tentative positions to float before validation (for float point arrays).
@@ -128,6 +171,13 @@ struct BoundarySmoothStats
   std::int64_t AcceptedMoves = 0;
   std::int64_t ReducedMoves = 0;
   std::int64_t RejectedMoves = 0;
+  /// Points the quality improvement moved (counted once per sweep).
+  std::int64_t ImprovedPoints = 0;
+  /// The volume restoration's targets, and the largest relative difference of a material's
+  /// volume from its target before and after it (0 without targets).
+  std::map<std::int64_t, double> TargetVolumes;
+  double LargestVolumeErrorBefore = 0.0;
+  double LargestVolumeErrorAfter = 0.0;
   double WorstConditionBefore = 0.0;
   double WorstConditionAfter = 0.0;
   double MinDihedralBefore = 180.0;
@@ -214,9 +264,40 @@ private:
 
   /// A validated Jacobi step of the points `byColour` toward lambda (c - x), followed, when mu is
   /// not zero, by mu (c - x) on the lambda targets before the validation.
+  /// With `given`, the targets are already in Targets (lambda and mu are not used).
   template <class IdType, class Projector, class Executor>
   Status Step(const std::vector<std::vector<std::int64_t>>& byColour, bool surface, double lambda,
-    double mu, const IdType* connectivity, Projector& projector, bool project, Executor& executor);
+    double mu, const IdType* connectivity, Projector& projector, bool project, Executor& executor,
+    bool given = false);
+
+  /// The volume restoration: see the header comment.
+  template <class IdType, class MaterialType, class Projector, class Executor>
+  Status RestoreVolumes(const std::vector<std::vector<std::int64_t>>& surfaceByColour,
+    const IdType* connectivity, const MaterialType* materials, Projector& projector,
+    Executor& executor);
+
+  /// The quality improvement: see the header comment.
+  template <class IdType, class MaterialType, class Projector, class Executor>
+  Status Improve(const IdType* connectivity, const MaterialType* materials, Projector& projector,
+    bool project, Executor& executor);
+
+  /// Per material of the cells around point p, the gradient at p of the sum of their
+  /// determinants (Dim! times the volume); whether p is on the outer boundary; the sum of the
+  /// gradients' absolute components (a scale). False when a cell around p is degenerate.
+  struct MaterialGradient
+  {
+    std::int64_t Material;
+    double Vector[Dim];
+  };
+  template <class IdType, class MaterialType>
+  bool VolumeGradients(const IdType* connectivity, const MaterialType* materials, std::int64_t p,
+    std::vector<MaterialGradient>& gradients, bool& outer, double& scale) const;
+
+  /// The directions (orthonormal, at most Dim) in which point p may move in the improvement:
+  /// those that keep every material's volume, and the body's, to first order.
+  template <class IdType, class MaterialType>
+  int FreeDirections(const IdType* connectivity, const MaterialType* materials, std::int64_t p,
+    double (&directions)[Dim][Dim]) const;
 
   Status Validate(double* points, std::int64_t numberOfPoints, std::int64_t numberOfCells,
     const BoundarySmoothOptions& options) const;
@@ -240,6 +321,7 @@ private:
   std::vector<double> Determinants;
   double ConditionBound = 0.0;
   double CosineBound = 1.0;
+  double OptionCosine = 1.0; // the cosine of MinDihedralAngle
   std::atomic<std::int64_t> Accepted{ 0 };
   std::atomic<std::int64_t> Reduced{ 0 };
   std::atomic<std::int64_t> Rejected{ 0 };
@@ -456,6 +538,18 @@ Status BoundarySmoother<Dim>::Validate(double* points, std::int64_t numberOfPoin
   {
     return Status::Invalid("the minimum dihedral angle must be in [0, 180) degrees");
   }
+  if (options.NumberOfImprovementSweeps < 0)
+  {
+    return Status::Invalid("the number of improvement sweeps must be >= 0");
+  }
+  if (options.NumberOfVolumeRounds < 0)
+  {
+    return Status::Invalid("the number of volume rounds must be >= 0");
+  }
+  if (!(options.VolumeTolerance >= 0.0))
+  {
+    return Status::Invalid("the volume tolerance must be >= 0");
+  }
   return Status::Ok();
 }
 
@@ -614,6 +708,23 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   }
   const double largestCosineBefore = summarize(
     this->Stats.WorstConditionBefore, this->Stats.MinDihedralBefore, this->Stats.VolumeBefore);
+  if (!options.TargetVolumes.empty() && materials)
+  {
+    this->Stats.TargetVolumes = options.TargetVolumes;
+  }
+  else if (options.VolumeTargetMaterials && materials)
+  {
+    double factorial = 1.0;
+    for (int k = 2; k <= Dim; ++k)
+    {
+      factorial *= k;
+    }
+    for (std::int64_t c = 0; c < cells; ++c)
+    {
+      this->Stats.TargetVolumes[options.VolumeTargetMaterials[c]] +=
+        this->Determinants[c] / factorial;
+    }
+  }
   this->ConditionBound = std::min(options.MaxConditionNumber, this->Stats.WorstConditionBefore);
   // The dihedral bound max(MinDihedralAngle, smallest of the input) as a cosine: the input's
   // largest cosine itself, and the largest cosine whose angle is at least MinDihedralAngle
@@ -630,6 +741,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     optionCosine = std::nextafter(optionCosine, 2.0);
   }
   this->CosineBound = std::min(optionCosine, largestCosineBefore);
+  this->OptionCosine = optionCosine;
   executor.ReportProgress(0.05);
 
   // Facets: per cell, which of its facets (bit i: the facet opposite corner i) are surface
@@ -905,8 +1017,22 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     {
       return status;
     }
-    executor.ReportProgress(0.1 + 0.85 * (iteration + 1) / options.NumberOfIterations);
+    executor.ReportProgress(0.1 + 0.8 * (iteration + 1) / options.NumberOfIterations);
   }
+  if (!this->Stats.TargetVolumes.empty())
+  {
+    status = this->RestoreVolumes(surfaceByColour, connectivity, materials, projector, executor);
+    if (!status.IsOk())
+    {
+      return status;
+    }
+  }
+  status = this->Improve(connectivity, materials, projector, project, executor);
+  if (!status.IsOk())
+  {
+    return status;
+  }
+  executor.ReportProgress(0.95);
 
   measure.First = false;
   executor.For(0, cells, 4096, measure);
@@ -940,7 +1066,7 @@ template <int Dim>
 template <class IdType, class Projector, class Executor>
 Status BoundarySmoother<Dim>::Step(const std::vector<std::vector<std::int64_t>>& byColour,
   bool surface, double lambda, double mu, const IdType* connectivity, Projector& projector,
-  bool project, Executor& executor)
+  bool project, Executor& executor, bool given)
 {
   constexpr std::int64_t Corners = Dim + 1;
   // Jacobi: every target from the positions before this step (Source), into Destination.
@@ -1126,9 +1252,12 @@ Status BoundarySmoother<Dim>::Step(const std::vector<std::vector<std::int64_t>>&
   // positions of the others.
   TargetKernel targets{ this, &all, connectivity, surface, lambda, this->Points,
     this->Targets.data() };
-  executor.For(0, static_cast<std::int64_t>(all.size()), 1024, targets);
+  if (!given)
+  {
+    executor.For(0, static_cast<std::int64_t>(all.size()), 1024, targets);
+  }
   const double* finalTargets = this->Targets.data();
-  if (mu != 0.0)
+  if (mu != 0.0 && !given)
   {
     TargetKernel composed{ this, &all, connectivity, surface, mu, this->Targets.data(),
       this->Composed.data() };
@@ -1151,6 +1280,741 @@ Status BoundarySmoother<Dim>::Step(const std::vector<std::vector<std::int64_t>>&
     std::copy(this->Points + p * Dim, this->Points + (p + 1) * Dim, this->Targets.data() + p * Dim);
   }
   return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
+}
+
+template <int Dim>
+template <class IdType, class MaterialType>
+bool BoundarySmoother<Dim>::VolumeGradients(const IdType* connectivity,
+  const MaterialType* materials, std::int64_t p, std::vector<MaterialGradient>& gradients,
+  bool& outer, double& scale) const
+{
+  constexpr int Corners = Dim + 1;
+  gradients.clear();
+  outer = false;
+  scale = 0.0;
+  const double* x = this->Points + p * Dim;
+  for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
+  {
+    const std::int64_t cell = this->Incidence.Cells[k];
+    const IdType* ids = connectivity + cell * Corners;
+    if (this->Signs[cell] == 0)
+    {
+      return false; // a degenerate input cell: no move of its points is ever validated
+    }
+    int own = 0;
+    while (static_cast<std::int64_t>(ids[own]) != p)
+    {
+      ++own;
+    }
+    for (int i = 0; i <= Dim; ++i)
+    {
+      outer = outer || (i != own && this->Incidence.FacetNeighbour(ids, cell, i) < 0);
+    }
+    // The determinant is affine in each corner: a unit step per axis gives its gradient.
+    const double* corners[Dim + 1];
+    double shifted[Dim];
+    std::copy(x, x + Dim, shifted);
+    this->CellCorners(ids, cell, p, shifted, corners);
+    auto determinant = [&]()
+    {
+      double edges[Dim][Dim];
+      for (int col = 0; col < Dim; ++col)
+      {
+        for (int r = 0; r < Dim; ++r)
+        {
+          edges[r][col] = corners[col + 1][r] - corners[0][r];
+        }
+      }
+      return Determinant<Dim>(edges);
+    };
+    const double base = determinant();
+    const std::int64_t material = materials ? static_cast<std::int64_t>(materials[cell]) : 0;
+    auto found = std::find_if(gradients.begin(), gradients.end(),
+      [&](const MaterialGradient& g) { return g.Material == material; });
+    if (found == gradients.end())
+    {
+      gradients.push_back(MaterialGradient{ material, {} });
+      found = gradients.end() - 1;
+    }
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      shifted[axis] += 1.0;
+      const double component = determinant() - base;
+      shifted[axis] = x[axis];
+      found->Vector[axis] += component;
+      scale += std::abs(component);
+    }
+  }
+  return true;
+}
+
+template <int Dim>
+template <class IdType, class MaterialType>
+int BoundarySmoother<Dim>::FreeDirections(const IdType* connectivity, const MaterialType* materials,
+  std::int64_t p, double (&directions)[Dim][Dim]) const
+{
+  std::vector<MaterialGradient> gradients;
+  bool outer = false;
+  double scale = 0.0;
+  if (!this->VolumeGradients(connectivity, materials, p, gradients, outer, scale))
+  {
+    return 0;
+  }
+  double total[Dim] = {};
+  for (const MaterialGradient& g : gradients)
+  {
+    for (int c = 0; c < Dim; ++c)
+    {
+      total[c] += g.Vector[c];
+    }
+  }
+  // Constraints: each material's volume, and the body's on the outer boundary. A material set of
+  // m members (the outside counting as one) gives min(Dim, m - 1) independent constraints; when
+  // the gradients give fewer (a folded interface) the point does not move.
+  std::vector<const double*> constraints;
+  for (const MaterialGradient& g : gradients)
+  {
+    constraints.push_back(g.Vector);
+  }
+  if (outer)
+  {
+    constraints.push_back(total);
+  }
+  const int expected = std::min<int>(Dim, static_cast<int>(gradients.size()) + (outer ? 1 : 0) - 1);
+  double basis[Dim][Dim];
+  int rank = 0;
+  auto orthogonalize = [&](const double* v, double(&r)[Dim], int count, double(&against)[Dim][Dim])
+  {
+    std::copy(v, v + Dim, r);
+    for (int q = 0; q < count; ++q)
+    {
+      double dot = 0.0;
+      for (int c = 0; c < Dim; ++c)
+      {
+        dot += against[q][c] * r[c];
+      }
+      for (int c = 0; c < Dim; ++c)
+      {
+        r[c] -= dot * against[q][c];
+      }
+    }
+    double norm = 0.0;
+    for (int c = 0; c < Dim; ++c)
+    {
+      norm += r[c] * r[c];
+    }
+    return std::sqrt(norm);
+  };
+  for (const double* v : constraints)
+  {
+    double r[Dim];
+    // Twice, so that the residual is orthogonal to rounding.
+    double norm = orthogonalize(v, r, rank, basis);
+    norm = orthogonalize(r, r, rank, basis);
+    if (rank < Dim && norm > 1e-6 * scale)
+    {
+      for (int c = 0; c < Dim; ++c)
+      {
+        basis[rank][c] = r[c] / norm;
+      }
+      ++rank;
+    }
+  }
+  if (rank < expected)
+  {
+    return 0;
+  }
+  // The complement: the axes with the constraints and earlier free directions removed.
+  double all[Dim][Dim];
+  for (int q = 0; q < rank; ++q)
+  {
+    std::copy(basis[q], basis[q] + Dim, all[q]);
+  }
+  int count = rank;
+  for (int axis = 0; axis < Dim && count < Dim; ++axis)
+  {
+    double e[Dim] = {};
+    e[axis] = 1.0;
+    double r[Dim];
+    double norm = orthogonalize(e, r, count, all);
+    norm = orthogonalize(r, r, count, all);
+    if (norm > 0.3)
+    {
+      for (int c = 0; c < Dim; ++c)
+      {
+        all[count][c] = r[c] / norm;
+      }
+      ++count;
+    }
+  }
+  // Components at rounding level are made exact zeros, so that a point on an axis-aligned
+  // interface keeps that coordinate bit for bit.
+  for (int q = rank; q < count; ++q)
+  {
+    double norm = 0.0;
+    for (int c = 0; c < Dim; ++c)
+    {
+      const double component = std::abs(all[q][c]) < 1e-12 ? 0.0 : all[q][c];
+      directions[q - rank][c] = component;
+      norm += component * component;
+    }
+    for (int c = 0; c < Dim; ++c)
+    {
+      directions[q - rank][c] /= std::sqrt(norm);
+    }
+  }
+  return count - rank;
+}
+
+template <int Dim>
+template <class IdType, class MaterialType, class Projector, class Executor>
+Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const MaterialType* materials,
+  Projector& projector, bool project, Executor& executor)
+{
+  const BoundarySmoothOptions& options = this->Options;
+  if (Dim < 2 || Dim > 3 || options.NumberOfImprovementSweeps == 0)
+  {
+    return Status::Ok();
+  }
+  constexpr std::int64_t Corners = Dim + 1;
+  auto isBad = [&](const Shape& shape)
+  { return shape.Condition > options.MaxConditionNumber || shape.Cosine > this->OptionCosine; };
+  // How far a cell is from the bounds: its worse ratio (1 at the bounds); an inverted cell is
+  // infinitely bad.
+  auto badness = [&](const SimplexCosines& shape)
+  {
+    if (!(shape.Determinant > 0.0))
+    {
+      return std::numeric_limits<double>::infinity();
+    }
+    double ratio = shape.Condition / options.MaxConditionNumber;
+    if (options.MinDihedralAngle > 0.0)
+    {
+      const double angle = DihedralDegrees(shape.LargestDihedralCosine);
+      ratio = std::max(ratio,
+        angle > 0.0 ? options.MinDihedralAngle / angle : std::numeric_limits<double>::infinity());
+    }
+    return ratio;
+  };
+  struct ImproveKernel
+  {
+    using Scratch = typename BoundarySmoother::Scratch;
+    BoundarySmoother* Self;
+    const std::vector<std::int64_t>* Points;
+    const IdType* Connectivity;
+    const MaterialType* Materials;
+    Projector* Project;
+    bool UseProjector;
+    const decltype(badness)* Badness;
+    Executor* Exec;
+    std::atomic<std::int64_t>* Improved;
+
+    // The incident cells' worst badness with p at y, or infinity when a cell breaks the limits.
+    double Evaluate(Scratch& scratch, std::int64_t p, const double* y, double conditionLimit,
+      double cosineLimit) const
+    {
+      BoundarySmoother& self = *this->Self;
+      scratch.Shapes.clear();
+      double worst = 0.0;
+      for (std::int64_t k = self.Incidence.Offsets[p]; k < self.Incidence.Offsets[p + 1]; ++k)
+      {
+        const std::int64_t cell = self.Incidence.Cells[k];
+        const double* corners[Dim + 1];
+        self.CellCorners(this->Connectivity + cell * Corners, cell, p, y, corners);
+        const SimplexCosines shape = MeasureSimplexCosines<Dim>(corners);
+        if (!(shape.Determinant > 0.0) || shape.Condition > conditionLimit ||
+          shape.LargestDihedralCosine > cosineLimit)
+        {
+          return std::numeric_limits<double>::infinity();
+        }
+        worst = std::max(worst, (*this->Badness)(shape));
+        scratch.Shapes.push_back({ shape.Condition, shape.LargestDihedralCosine });
+      }
+      return worst;
+    }
+
+    void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
+    {
+      BoundarySmoother& self = *this->Self;
+      const BoundarySmoothOptions& options = self.Options;
+      std::int64_t improved = 0;
+      for (std::int64_t i = begin; i < end && !this->Exec->ShouldAbort(); ++i)
+      {
+        const std::int64_t p = (*this->Points)[i];
+        double directions[Dim][Dim];
+        const int count = self.FreeDirections(this->Connectivity, this->Materials, p, directions);
+        if (count == 0)
+        {
+          continue;
+        }
+        double* x = self.Points + p * Dim;
+        const std::int64_t first = self.Incidence.Offsets[p], last = self.Incidence.Offsets[p + 1];
+        double oldWorst = 0.0, oldLargestCosine = -1.0, shortest = 0.0;
+        for (std::int64_t k = first; k < last; ++k)
+        {
+          const std::int64_t cell = self.Incidence.Cells[k];
+          oldWorst = std::max(oldWorst, self.Shapes[cell].Condition);
+          oldLargestCosine = std::max(oldLargestCosine, self.Shapes[cell].Cosine);
+          const IdType* ids = this->Connectivity + cell * Corners;
+          for (int v = 0; v <= Dim; ++v)
+          {
+            const double* q = self.Points + static_cast<std::int64_t>(ids[v]) * Dim;
+            double squared = 0.0;
+            for (int c = 0; c < Dim; ++c)
+            {
+              squared += (q[c] - x[c]) * (q[c] - x[c]);
+            }
+            if (squared > 0.0 && (shortest == 0.0 || squared < shortest))
+            {
+              shortest = squared;
+            }
+          }
+        }
+        shortest = std::sqrt(shortest);
+        const double conditionLimit = std::max(oldWorst, self.ConditionBound);
+        const double cosineLimit = std::max(oldLargestCosine, self.CosineBound);
+        double start[Dim];
+        std::copy(x, x + Dim, start);
+        double current = this->Evaluate(scratch, p, x, conditionLimit, cosineLimit);
+        if (!std::isfinite(current))
+        {
+          continue; // a cell already outside the limits (a degenerate input cell)
+        }
+        // Compass search in the free directions, within 0.6 of the shortest edge of the start.
+        const double reach = 0.6 * shortest;
+        double step = 0.2 * shortest;
+        std::vector<Shape> best;
+        bool moved = false;
+        // Until every cell around the point is within the bounds (badness at most 1).
+        for (int iteration = 0; iteration < 64 && step > shortest / 256.0 && current > 1.0;
+             ++iteration)
+        {
+          double bestBadness = current, bestPosition[Dim] = {};
+          // Every combination of -1, 0, 1 times the free directions, normalised: the worst of
+          // the cells is a maximum, whose descent often lies between two directions.
+          int combinations = 1;
+          for (int d = 0; d < count; ++d)
+          {
+            combinations *= 3;
+          }
+          for (int combination = 0; combination < combinations; ++combination)
+          {
+            {
+              double move[Dim] = {};
+              double length = 0.0;
+              for (int d = 0, code = combination; d < count; ++d, code /= 3)
+              {
+                const int factor = code % 3 - 1;
+                for (int c = 0; c < Dim; ++c)
+                {
+                  move[c] += factor * directions[d][c];
+                }
+                length += factor * factor;
+              }
+              if (length == 0.0)
+              {
+                continue;
+              }
+              double y[Dim];
+              double squared = 0.0, fromOriginal = 0.0;
+              for (int c = 0; c < Dim; ++c)
+              {
+                y[c] = x[c] + step / std::sqrt(length) * move[c];
+              }
+              if (this->UseProjector && self.Roles[p] == Surface &&
+                !(*this->Project)(p, static_cast<double*>(y)))
+              {
+                continue;
+              }
+              if (options.SinglePrecision)
+              {
+                for (int c = 0; c < Dim; ++c)
+                {
+                  y[c] = static_cast<double>(static_cast<float>(y[c]));
+                }
+              }
+              for (int c = 0; c < Dim; ++c)
+              {
+                squared += (y[c] - start[c]) * (y[c] - start[c]);
+                const double o = y[c] - self.Original[p * Dim + c];
+                fromOriginal += o * o;
+              }
+              if (squared > reach * reach ||
+                (options.MaxDisplacement > 0.0 &&
+                  fromOriginal > options.MaxDisplacement * options.MaxDisplacement))
+              {
+                continue;
+              }
+              const double value = this->Evaluate(scratch, p, y, conditionLimit, cosineLimit);
+              if (value < bestBadness)
+              {
+                bestBadness = value;
+                std::copy(y, y + Dim, bestPosition);
+                best = scratch.Shapes;
+              }
+            }
+          }
+          if (bestBadness < current)
+          {
+            current = bestBadness;
+            std::copy(bestPosition, bestPosition + Dim, x);
+            for (std::int64_t k = first; k < last; ++k)
+            {
+              self.Shapes[self.Incidence.Cells[k]] = best[k - first];
+            }
+            moved = true;
+          }
+          else
+          {
+            step *= 0.5;
+          }
+        }
+        improved += moved;
+      }
+      *this->Improved += improved;
+    }
+  };
+
+  std::vector<std::int32_t> colours(static_cast<std::size_t>(this->NumberOfPoints), -1);
+  for (int sweep = 0; sweep < options.NumberOfImprovementSweeps; ++sweep)
+  {
+    // The movable points of the cells outside the bounds, coloured greedily in point order.
+    std::vector<std::int64_t> candidates;
+    for (std::int64_t c = 0; c < this->NumberOfCells; ++c)
+    {
+      if (!isBad(this->Shapes[c]))
+      {
+        continue;
+      }
+      const IdType* ids = connectivity + c * Corners;
+      for (int v = 0; v <= Dim; ++v)
+      {
+        const auto id = static_cast<std::int64_t>(ids[v]);
+        if (this->Roles[id] == Surface || this->Roles[id] == InteriorLayer)
+        {
+          candidates.push_back(id);
+        }
+      }
+    }
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    if (candidates.empty())
+    {
+      break;
+    }
+    std::vector<std::vector<std::int64_t>> byColour;
+    std::vector<char> used;
+    for (const std::int64_t p : candidates)
+    {
+      used.assign(byColour.size(), 0);
+      for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
+      {
+        const IdType* ids = connectivity + this->Incidence.Cells[k] * Corners;
+        for (int v = 0; v <= Dim; ++v)
+        {
+          const std::int32_t colour = colours[static_cast<std::int64_t>(ids[v])];
+          if (colour >= 0)
+          {
+            used[colour] = 1;
+          }
+        }
+      }
+      const auto colour =
+        static_cast<std::int32_t>(std::find(used.begin(), used.end(), 0) - used.begin());
+      if (colour == static_cast<std::int32_t>(byColour.size()))
+      {
+        byColour.emplace_back();
+      }
+      colours[p] = colour;
+      byColour[colour].push_back(p);
+    }
+    for (const std::int64_t p : candidates)
+    {
+      colours[p] = -1;
+    }
+    std::atomic<std::int64_t> improved{ 0 };
+    for (const auto& points : byColour)
+    {
+      ImproveKernel kernel{ this, &points, connectivity, materials, &projector, false, &badness,
+        &executor, &improved };
+      kernel.UseProjector = project;
+      executor.For(0, static_cast<std::int64_t>(points.size()), 16, kernel);
+      if (executor.ShouldAbort())
+      {
+        return Status::Aborted();
+      }
+    }
+    this->Stats.ImprovedPoints += improved;
+    if (improved == 0)
+    {
+      break;
+    }
+  }
+  return Status::Ok();
+}
+
+template <int Dim>
+template <class IdType, class MaterialType, class Projector, class Executor>
+Status BoundarySmoother<Dim>::RestoreVolumes(
+  const std::vector<std::vector<std::int64_t>>& surfaceByColour, const IdType* connectivity,
+  const MaterialType* materials, Projector& projector, Executor& executor)
+{
+  constexpr std::int64_t Corners = Dim + 1;
+  constexpr std::int64_t Outside = std::numeric_limits<std::int64_t>::min();
+  const std::map<std::int64_t, double>& targets = this->Stats.TargetVolumes;
+  double factorial = 1.0;
+  for (int k = 2; k <= Dim; ++k)
+  {
+    factorial *= k;
+  }
+  // Per-cell volumes in parallel, then summed per material in cell order (deterministic).
+  std::vector<double> cellVolumes(static_cast<std::size_t>(this->NumberOfCells));
+  struct VolumeKernel
+  {
+    using Scratch = NoScratch;
+    const BoundarySmoother* Self;
+    const IdType* Connectivity;
+    double* Volumes;
+    double Factorial;
+    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    {
+      for (std::int64_t c = begin; c < end; ++c)
+      {
+        const double* corners[Dim + 1];
+        this->Self->CellCorners(this->Connectivity + c * Corners, c, -1, nullptr, corners);
+        double edges[Dim][Dim];
+        for (int col = 0; col < Dim; ++col)
+        {
+          for (int r = 0; r < Dim; ++r)
+          {
+            edges[r][col] = corners[col + 1][r] - corners[0][r];
+          }
+        }
+        this->Volumes[c] = Determinant<Dim>(edges) / this->Factorial;
+      }
+    }
+  };
+  auto largestError = [&](std::map<std::int64_t, double>& volumes)
+  {
+    VolumeKernel kernel{ this, connectivity, cellVolumes.data(), factorial };
+    executor.For(0, this->NumberOfCells, 4096, kernel);
+    volumes.clear();
+    for (std::int64_t c = 0; c < this->NumberOfCells; ++c)
+    {
+      volumes[static_cast<std::int64_t>(materials[c])] += cellVolumes[c];
+    }
+    // Over the materials that have cells and a target (a target material the cut did not keep
+    // is no interface's to restore).
+    double largest = 0.0;
+    for (const auto& target : targets)
+    {
+      const auto found = volumes.find(target.first);
+      if (target.second > 0.0 && found != volumes.end())
+      {
+        largest = std::max(largest, std::abs(found->second - target.second) / target.second);
+      }
+    }
+    return largest;
+  };
+
+  std::vector<std::int64_t> points;
+  for (const auto& colour : surfaceByColour)
+  {
+    points.insert(points.end(), colour.begin(), colour.end());
+  }
+  const auto count = static_cast<std::int64_t>(points.size());
+  // Per surface point between exactly two materials (the outside counting as one): the pair,
+  // with First a material of cells, and the gradient of First's volume at the point.
+  std::vector<std::int64_t> first(points.size()), second(points.size());
+  std::vector<double> gradients(points.size() * Dim);
+  struct GradientKernel
+  {
+    using Scratch = NoScratch;
+    const BoundarySmoother* Self;
+    const IdType* Connectivity;
+    const MaterialType* Materials;
+    const std::vector<std::int64_t>* Points;
+    std::int64_t* First;
+    std::int64_t* Second;
+    double* Gradients;
+    double Factorial;
+    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    {
+      std::vector<MaterialGradient> around;
+      for (std::int64_t i = begin; i < end; ++i)
+      {
+        bool outer = false;
+        double scale = 0.0;
+        this->First[i] = this->Second[i] = Outside;
+        if (!this->Self->VolumeGradients(
+              this->Connectivity, this->Materials, (*this->Points)[i], around, outer, scale) ||
+          around.size() + (outer ? 1 : 0) != 2)
+        {
+          continue; // a junction or a degenerate neighbourhood: the point stays
+        }
+        this->First[i] = around[0].Material;
+        this->Second[i] = outer ? Outside : around[1].Material;
+        for (int c = 0; c < Dim; ++c)
+        {
+          this->Gradients[i * Dim + c] = around[0].Vector[c] / this->Factorial;
+        }
+      }
+    }
+  };
+
+  std::map<std::int64_t, double> volumes;
+  this->Stats.LargestVolumeErrorBefore = largestError(volumes);
+  this->Stats.LargestVolumeErrorAfter = this->Stats.LargestVolumeErrorBefore;
+  for (int round = 0;
+       round<this->Options.NumberOfVolumeRounds&& this->Stats.LargestVolumeErrorAfter> this->Options
+         .VolumeTolerance;
+       ++round)
+  {
+    GradientKernel gradientKernel{ this, connectivity, materials, &points, first.data(),
+      second.data(), gradients.data(), factorial };
+    executor.For(0, count, 1024, gradientKernel);
+    if (executor.ShouldAbort())
+    {
+      return Status::Aborted();
+    }
+    // Moving the points of pair (a, b) by (lambda_a - lambda_b) g changes a's volume by
+    // (lambda_a - lambda_b) |g|^2 (first order): a weighted graph Laplacian in the lambdas of
+    // the materials with a target, the background and the outside held at 0.
+    std::map<std::int64_t, int> unknown;
+    std::map<std::pair<std::int64_t, std::int64_t>, double> weights;
+    for (std::int64_t i = 0; i < count; ++i)
+    {
+      if (first[i] == Outside)
+      {
+        continue;
+      }
+      double squared = 0.0;
+      for (int c = 0; c < Dim; ++c)
+      {
+        squared += gradients[i * Dim + c] * gradients[i * Dim + c];
+      }
+      weights[{ std::min(first[i], second[i]), std::max(first[i], second[i]) }] += squared;
+    }
+    auto free = [&](std::int64_t material)
+    {
+      return material != Outside && material != this->Options.BackgroundMaterial &&
+        targets.count(material) > 0;
+    };
+    for (const auto& weight : weights)
+    {
+      for (const std::int64_t material : { weight.first.first, weight.first.second })
+      {
+        if (free(material) && !unknown.count(material))
+        {
+          const int index = static_cast<int>(unknown.size());
+          unknown[material] = index;
+        }
+      }
+    }
+    const std::size_t n = unknown.size();
+    if (n == 0)
+    {
+      break;
+    }
+    std::vector<double> diagonal(n, 0.0), residual(n, 0.0), lambdas(n, 0.0);
+    std::vector<std::tuple<int, int, double>> couplings;
+    for (const auto& weight : weights)
+    {
+      const auto a = unknown.find(weight.first.first), b = unknown.find(weight.first.second);
+      if (a != unknown.end())
+      {
+        diagonal[a->second] += weight.second;
+      }
+      if (b != unknown.end())
+      {
+        diagonal[b->second] += weight.second;
+      }
+      if (a != unknown.end() && b != unknown.end())
+      {
+        couplings.emplace_back(a->second, b->second, weight.second);
+      }
+    }
+    double norm = 0.0;
+    for (const auto& entry : unknown)
+    {
+      residual[entry.second] = targets.at(entry.first) - volumes[entry.first];
+      norm += residual[entry.second] * residual[entry.second];
+    }
+    // Conjugate gradients (the matrix is symmetric, and positive definite when every group
+    // of materials touches the background or the outside; the others get a tiny shift).
+    double largestDiagonal = *std::max_element(diagonal.begin(), diagonal.end());
+    for (double& d : diagonal)
+    {
+      d += 1e-12 * largestDiagonal;
+    }
+    auto multiply = [&](const std::vector<double>& v, std::vector<double>& out)
+    {
+      for (std::size_t k = 0; k < n; ++k)
+      {
+        out[k] = diagonal[k] * v[k];
+      }
+      for (const auto& coupling : couplings)
+      {
+        out[std::get<0>(coupling)] -= std::get<2>(coupling) * v[std::get<1>(coupling)];
+        out[std::get<1>(coupling)] -= std::get<2>(coupling) * v[std::get<0>(coupling)];
+      }
+    };
+    std::vector<double> direction(residual), product(n);
+    double rr = norm;
+    for (std::size_t iteration = 0; iteration < 10 * n + 10 && rr > 1e-24 * norm; ++iteration)
+    {
+      multiply(direction, product);
+      double curvature = 0.0;
+      for (std::size_t k = 0; k < n; ++k)
+      {
+        curvature += direction[k] * product[k];
+      }
+      if (!(curvature > 0.0))
+      {
+        break;
+      }
+      const double step = rr / curvature;
+      double next = 0.0;
+      for (std::size_t k = 0; k < n; ++k)
+      {
+        lambdas[k] += step * direction[k];
+        residual[k] -= step * product[k];
+        next += residual[k] * residual[k];
+      }
+      for (std::size_t k = 0; k < n; ++k)
+      {
+        direction[k] = residual[k] + next / rr * direction[k];
+      }
+      rr = next;
+    }
+    auto lambdaOf = [&](std::int64_t material)
+    {
+      const auto found = unknown.find(material);
+      return found == unknown.end() ? 0.0 : lambdas[found->second];
+    };
+    // The targets of the moves, validated like the smoothing's.
+    for (std::int64_t i = 0; i < count; ++i)
+    {
+      if (first[i] == Outside)
+      {
+        continue;
+      }
+      const double factor = lambdaOf(first[i]) - lambdaOf(second[i]);
+      for (int c = 0; c < Dim; ++c)
+      {
+        this->Targets[points[i] * Dim + c] =
+          this->Points[points[i] * Dim + c] + factor * gradients[i * Dim + c];
+      }
+    }
+    const Status status =
+      this->Step(surfaceByColour, true, 0.0, 0.0, connectivity, projector, false, executor, true);
+    if (!status.IsOk())
+    {
+      return status;
+    }
+    this->Stats.LargestVolumeErrorAfter = largestError(volumes);
+  }
+  return Status::Ok();
 }
 
 } // namespace stm

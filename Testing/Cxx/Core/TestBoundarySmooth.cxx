@@ -590,7 +590,7 @@ TYPED_TEST(BoundarySmoothTest, StaircaseSurfaceBecomesSmoother)
 /// on the border, keeping every interface in its plane and every junction line on its line; the
 /// junction points of 2D and the quadruple point (s, s, s) of 3D are not jittered.
 template <int D>
-SmoothMesh<D> JitteredJunctions(std::int64_t extent, unsigned seed)
+SmoothMesh<D> JitteredJunctions(std::int64_t extent, unsigned seed, double amplitude = 0.1)
 {
   const std::int64_t s = extent / 2;
   LabelImage<D> image(UniformExtents<D>(extent));
@@ -616,7 +616,7 @@ SmoothMesh<D> JitteredJunctions(std::int64_t extent, unsigned seed)
   mesh.Cells = uniform.Connectivity;
   mesh.Materials = uniform.MaterialsAsInt64();
   std::mt19937 random(seed);
-  std::uniform_real_distribution<double> jitter(-0.1, 0.1);
+  std::uniform_real_distribution<double> jitter(-amplitude, amplitude);
   const auto middle = static_cast<double>(s);
   for (std::int64_t p = 0; p < mesh.NumberOfPoints(); ++p)
   {
@@ -725,6 +725,166 @@ TYPED_TEST(BoundarySmoothTest, JunctionLinesAndPointsAreRespected)
   EXPECT_EQ(stats.JunctionCornerPoints, D == 2 ? 4 : 5);
 }
 
+// The quality improvement alone (no iterations), on junctions jittered into bad cells: the
+// worst cell gets better and nothing gets worse, a point moves only within its interface plane
+// (along its junction line in 3D), the junction point (2D) and the quadruple point (3D) stay,
+// and every material keeps its volume (the interfaces are flat, so exactly up to rounding).
+// Without sweeps nothing moves; four threads give the same points.
+TYPED_TEST(BoundarySmoothTest, ImprovementKeepsInterfacesJunctionsAndVolumes)
+{
+  constexpr int D = TypeParam::value;
+  const std::int64_t extent = D == 2 ? 16 : 8;
+  const double middle = static_cast<double>(extent / 2);
+  const SmoothMesh<D> input = JitteredJunctions<D>(extent, 11, 0.3);
+  const stm::MeshInvariantReport before = Check<D>(input);
+  ASSERT_TRUE(before.IsValid()) << before.Summary();
+  const auto qualityBefore = Quality<D>(input);
+  stm::BoundarySmoothOptions options;
+  options.NumberOfIterations = 0;
+  options.NumberOfImprovementSweeps = 0;
+  SmoothMesh<D> unchanged = input;
+  EXPECT_EQ(Smooth<D>(unchanged, options).MovedPoints, 0);
+  EXPECT_EQ(unchanged.Points, input.Points);
+
+  options.NumberOfImprovementSweeps = 10;
+  SmoothMesh<D> mesh = input;
+  const stm::BoundarySmoothStats stats = Smooth<D>(mesh, options);
+  const stm::MeshInvariantReport report = Check<D>(mesh);
+  EXPECT_TRUE(report.IsValid()) << report.Summary();
+  EXPECT_GT(stats.ImprovedPoints, 0);
+  EXPECT_EQ(stats.AcceptedMoves + stats.ReducedMoves + stats.RejectedMoves, 0);
+  const auto quality = Quality<D>(mesh);
+  // Both figures of the input are beyond the bounds; the badness of the worst cell drops.
+  EXPECT_GT(qualityBefore.first, options.MaxConditionNumber);
+  EXPECT_LT(qualityBefore.second, options.MinDihedralAngle);
+  EXPECT_LE(quality.first, qualityBefore.first);
+  EXPECT_GE(quality.second, qualityBefore.second);
+  EXPECT_LT(
+    std::max(quality.first / options.MaxConditionNumber, options.MinDihedralAngle / quality.second),
+    std::max(qualityBefore.first / options.MaxConditionNumber,
+      options.MinDihedralAngle / qualityBefore.second));
+  const std::map<std::int64_t, double>& volumesBefore = before.VolumePerMaterial;
+  std::map<std::int64_t, double> volumesAfter = report.VolumePerMaterial;
+  ASSERT_EQ(volumesBefore.size(), volumesAfter.size());
+  for (const auto& entry : volumesBefore)
+  {
+    EXPECT_NEAR(volumesAfter[entry.first], entry.second, 1e-12 * before.TotalVolume)
+      << "material " << entry.first;
+  }
+  std::int64_t movedOnInterfaces = 0;
+  for (std::int64_t p = 0; p < mesh.NumberOfPoints(); ++p)
+  {
+    const double* x = input.Points.data() + p * D;
+    const double* y = mesh.Points.data() + p * D;
+    const bool onX = x[0] == middle;
+    const bool onY = x[1] == middle && x[0] >= middle;
+    const bool onZ = D == 3 && x[D - 1] == middle && x[0] >= middle && x[1] >= middle;
+    EXPECT_TRUE(!onX || y[0] == middle) << "point " << p;
+    EXPECT_TRUE(!onY || y[1] == middle) << "point " << p;
+    EXPECT_TRUE(!onZ || y[D - 1] == middle) << "point " << p;
+    const int planes = (onX ? 1 : 0) + (onY ? 1 : 0) + (onZ ? 1 : 0);
+    bool moved = false;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      moved = moved || y[axis] != x[axis];
+    }
+    EXPECT_TRUE(planes < D || !moved) << "junction point " << p << " moved";
+    movedOnInterfaces += planes > 0 && moved ? 1 : 0;
+  }
+  EXPECT_GT(movedOnInterfaces, 0);
+  // The same on four threads (the points of a sweep are coloured).
+  SmoothMesh<D> pooled = input;
+  stm::ThreadPoolExecutor four(4);
+  EXPECT_EQ(Smooth<D>(pooled, options, four).ImprovedPoints, stats.ImprovedPoints);
+  EXPECT_EQ(pooled.Points, mesh.Points);
+  std::cout << D << "D improvement: " << stats.ImprovedPoints << " moves (" << movedOnInterfaces
+            << " points on interfaces), worst condition " << qualityBefore.first << " -> "
+            << quality.first << ", smallest angle " << qualityBefore.second << " -> "
+            << quality.second << "\n";
+}
+
+// Volume restoration. A Laplacian smoothing of the cut ball shrinks it by more than 1%; with the
+// input's volumes as targets, the ball gets its volume back to 1e-6. On the jittered junctions,
+// targets 1% off each material's volume are reached to 1e-6, and the junction points (2D)
+// and the quadruple point (3D) stay.
+TYPED_TEST(BoundarySmoothTest, VolumeRestorationReachesTheTargets)
+{
+  constexpr int D = TypeParam::value;
+  {
+    const SmoothMesh<D> input = CutBall<D>(Extent<D>(), 0.35);
+    const double inside = Check<D>(input).VolumePerMaterial.at(1);
+    stm::BoundarySmoothOptions options;
+    options.Method = stm::SmoothingMethod::Laplacian;
+    SmoothMesh<D> shrunk = input, restored = input;
+    const stm::BoundarySmoothStats plain = Smooth<D>(shrunk, options);
+    EXPECT_TRUE(plain.TargetVolumes.empty());
+    EXPECT_LT(Check<D>(shrunk).VolumePerMaterial.at(1), 0.99 * inside);
+    options.VolumeTargetMaterials = input.Materials.data();
+    options.VolumeTolerance = 1e-7;
+    options.NumberOfVolumeRounds = 50;
+    const stm::BoundarySmoothStats stats = Smooth<D>(restored, options);
+    const stm::MeshInvariantReport report = Check<D>(restored);
+    EXPECT_TRUE(report.IsValid()) << report.Summary();
+    EXPECT_NEAR(stats.TargetVolumes.at(1), inside, 1e-9 * inside);
+    EXPECT_GT(stats.LargestVolumeErrorBefore, 0.01);
+    EXPECT_LT(stats.LargestVolumeErrorAfter, 1e-6);
+    EXPECT_NEAR(report.VolumePerMaterial.at(1), inside, 1e-6 * inside);
+    std::cout << D << "D Laplacian ball: volume " << inside << " -> "
+              << Check<D>(shrunk).VolumePerMaterial.at(1) << ", restored "
+              << report.VolumePerMaterial.at(1) << "\n";
+  }
+  const std::int64_t extent = D == 2 ? 16 : 8;
+  const double middle = static_cast<double>(extent / 2);
+  const SmoothMesh<D> input = JitteredJunctions<D>(extent, 5);
+  const stm::MeshInvariantReport before = Check<D>(input);
+  stm::BoundarySmoothOptions options;
+  options.NumberOfIterations = 0;
+  options.NumberOfImprovementSweeps = 0;
+  options.VolumeTolerance = 1e-7;
+  double factor = 1.01;
+  for (const auto& entry : before.VolumePerMaterial)
+  {
+    if (entry.first != 0)
+    {
+      options.TargetVolumes[entry.first] = factor * entry.second;
+      factor = factor > 1.0 ? 0.99 : 1.01;
+    }
+  }
+  SmoothMesh<D> mesh = input;
+  const stm::BoundarySmoothStats stats = Smooth<D>(mesh, options);
+  const stm::MeshInvariantReport report = Check<D>(mesh);
+  EXPECT_TRUE(report.IsValid()) << report.Summary();
+  EXPECT_NEAR(stats.LargestVolumeErrorBefore, 0.01 / 0.99, 1e-9);
+  EXPECT_LT(stats.LargestVolumeErrorAfter, 1e-6);
+  for (const auto& target : options.TargetVolumes)
+  {
+    EXPECT_NEAR(report.VolumePerMaterial.at(target.first), target.second, 1e-6 * target.second)
+      << "material " << target.first;
+  }
+  std::int64_t junctionPoints = 0;
+  for (std::int64_t p = 0; p < mesh.NumberOfPoints(); ++p)
+  {
+    const double* x = input.Points.data() + p * D;
+    bool inside = true;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      inside = inside && x[axis] > 1.0 && x[axis] < static_cast<double>(extent - 1);
+    }
+    const bool onX = x[0] == middle;
+    const bool onY = x[1] == middle && x[0] >= middle;
+    const bool onZ = D == 3 && x[D - 1] == middle && x[0] >= middle && x[1] >= middle;
+    if (inside && (onX ? 1 : 0) + (onY ? 1 : 0) + (onZ ? 1 : 0) == D)
+    {
+      ++junctionPoints;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        EXPECT_EQ(mesh.Points[p * D + axis], x[axis]);
+      }
+    }
+  }
+  EXPECT_EQ(junctionPoints, 1);
+}
+
 TEST(BoundarySmooth, RejectsBadOptionsAndIds)
 {
   SmoothMesh<2> mesh = CutBall<2>(8, 0.3);
@@ -750,6 +910,15 @@ TEST(BoundarySmooth, RejectsBadOptionsAndIds)
   EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
   options = stm::BoundarySmoothOptions();
   options.MinDihedralAngle = 180.0;
+  EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
+  options = stm::BoundarySmoothOptions();
+  options.NumberOfImprovementSweeps = -1;
+  EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
+  options = stm::BoundarySmoothOptions();
+  options.NumberOfVolumeRounds = -1;
+  EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
+  options = stm::BoundarySmoothOptions();
+  options.VolumeTolerance = -1.0;
   EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
   EXPECT_EQ(mesh.Points, original);
   mesh.Cells[5] = mesh.NumberOfPoints();

@@ -277,6 +277,12 @@ TEST(BoundarySmoothFilter, BadInputGetsClearErrors)
   }
   vtkNew<stmSpacetreeTessellate> tessellate;
   tessellate->SetInputConnection(tree->GetOutputPort());
+  { // the tessellation has Material, but neither OriginalMaterial nor OriginalMaterialVolumes
+    vtkNew<stmBoundarySmooth> restore;
+    restore->SetInputConnection(tessellate->GetOutputPort());
+    restore->RestoreOriginalVolumesOn();
+    check(restore, "RestoreOriginalVolumes needs the cell array Material, and the field array");
+  }
   vtkNew<stmMarchingSimplices> cut;
   cut->SetInputConnection(tessellate->GetOutputPort());
   cut->Update();
@@ -294,6 +300,11 @@ TEST(BoundarySmoothFilter, BadInputGetsClearErrors)
   smooth->SetMinDihedralAngle(-1);
   check(smooth, "MinDihedralAngle must be in [0, 180)");
   smooth->SetMinDihedralAngle(15);
+  smooth->SetNumberOfImprovementSweeps(-3); // clamped to [0, 100]
+  EXPECT_EQ(smooth->GetNumberOfImprovementSweeps(), 0);
+  smooth->SetNumberOfImprovementSweeps(1000);
+  EXPECT_EQ(smooth->GetNumberOfImprovementSweeps(), 100);
+  smooth->SetNumberOfImprovementSweeps(10);
   smooth->ProjectToFunctionOn();
   check(smooth, "no ImplicitFunction");
   smooth->ProjectToFunctionOff();

@@ -7,6 +7,7 @@
 
 #include "stmFilterTestUtilities.h"
 
+#include "stmBoundarySmooth.h"
 #include "stmImageToSpacetree.h"
 #include "stmMarchingSimplices.h"
 #include "stmMultiMaterialCut.h"
@@ -15,6 +16,7 @@
 
 #include "vtkCellData.h"
 #include "vtkDataArray.h"
+#include "vtkFieldData.h"
 #include "vtkImageData.h"
 #include "vtkIntArray.h"
 #include "vtkMath.h"
@@ -129,6 +131,39 @@ void CheckEllipsoids(vtkImageData* image, const int axes[Dim])
     relabelled += original->GetTuple1(c) != material->GetTuple1(c) ? 1 : 0;
   }
   EXPECT_GT(relabelled, 0);
+
+  // OriginalMaterialVolumes: every label's voxels (the input's volumes, before snapping), which
+  // BoundarySmooth's RestoreOriginalVolumes gives back to each label within its tolerance.
+  vtkDataArray* volumes = mesh->GetFieldData()->GetArray("OriginalMaterialVolumes");
+  ASSERT_NE(volumes, nullptr);
+  ASSERT_EQ(volumes->GetNumberOfComponents(), 2);
+  std::map<long long, double> originals;
+  for (vtkIdType t = 0; t < volumes->GetNumberOfTuples(); ++t)
+  {
+    originals[static_cast<long long>(volumes->GetComponent(t, 0))] = volumes->GetComponent(t, 1);
+  }
+  EXPECT_EQ(originals.size(), counts.size());
+  vtkNew<stmBoundarySmooth> smooth;
+  smooth->SetInputConnection(pipeline.Cut->GetOutputPort());
+  smooth->RestoreOriginalVolumesOn();
+  smooth->Update();
+  const stm::MeshInvariantReport smoothed =
+    stmTest::CheckMesh<Dim>(smooth->GetOutput(), axes, 1e-9);
+  EXPECT_TRUE(smoothed.IsValid()) << smoothed.Summary();
+  EXPECT_GT(smooth->GetLargestVolumeErrorBefore(), 1e-3);
+  EXPECT_LE(smooth->GetLargestVolumeErrorAfter(), 1e-4);
+  for (const auto& entry : counts)
+  {
+    if (entry.first != 0)
+    {
+      const double expected = static_cast<double>(entry.second) * voxel;
+      EXPECT_NEAR(originals[entry.first], expected, 1e-9 * expected) << "label " << entry.first;
+      EXPECT_NEAR(smoothed.VolumePerMaterial.at(entry.first), expected, 1e-4 * expected)
+        << "label " << entry.first;
+    }
+  }
+  std::cout << Dim << "D ellipsoids: largest volume error " << smooth->GetLargestVolumeErrorBefore()
+            << " before the restoration, " << smooth->GetLargestVolumeErrorAfter() << " after\n";
 }
 
 TEST(MultiMaterialCutFilter, NestedEllipsoids)
