@@ -254,6 +254,13 @@ private:
   void ConstrainJunctions(const IdType* connectivity, const MaterialType* materials,
     const std::vector<std::uint8_t>& surfaceMasks);
 
+  /// The smallest colour (>= 0) that no point sharing a cell with p has in `colours` (-1: no
+  /// colour yet); `numberOfColours` are in use; `used` is scratch.
+  template <class IdType>
+  std::int32_t FreeColour(const IdType* connectivity, std::int64_t p,
+    const std::vector<std::int32_t>& colours, std::size_t numberOfColours,
+    std::vector<char>& used) const;
+
   template <class IdType>
   void CellCorners(const IdType* ids, std::int64_t cell, std::int64_t movedPoint,
     const double* movedPosition, const double* (&corners)[Dim + 1]) const;
@@ -551,6 +558,28 @@ Status BoundarySmoother<Dim>::Validate(double* points, std::int64_t numberOfPoin
     return Status::Invalid("the volume tolerance must be >= 0");
   }
   return Status::Ok();
+}
+
+template <int Dim>
+template <class IdType>
+std::int32_t BoundarySmoother<Dim>::FreeColour(const IdType* connectivity, std::int64_t p,
+  const std::vector<std::int32_t>& colours, std::size_t numberOfColours,
+  std::vector<char>& used) const
+{
+  used.assign(numberOfColours, 0);
+  for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
+  {
+    const IdType* ids = connectivity + this->Incidence.Cells[k] * (Dim + 1);
+    for (int v = 0; v <= Dim; ++v)
+    {
+      const std::int32_t colour = colours[static_cast<std::int64_t>(ids[v])];
+      if (colour >= 0)
+      {
+        used[colour] = 1;
+      }
+    }
+  }
+  return static_cast<std::int32_t>(std::find(used.begin(), used.end(), 0) - used.begin());
 }
 
 template <int Dim>
@@ -962,24 +991,10 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
         this->Stats.FixedPoints += role == Fixed;
         continue;
       }
-      used.assign(used.size(), 0);
-      for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
+      const std::int32_t colour =
+        this->FreeColour(connectivity, p, colours, surfaceByColour.size(), used);
+      if (colour == static_cast<std::int32_t>(surfaceByColour.size()))
       {
-        const IdType* ids = connectivity + this->Incidence.Cells[k] * Corners;
-        for (int v = 0; v <= Dim; ++v)
-        {
-          const std::int32_t colour = colours[static_cast<std::int64_t>(ids[v])];
-          if (colour >= 0)
-          {
-            used[colour] = 1;
-          }
-        }
-      }
-      const auto free = std::find(used.begin(), used.end(), 0);
-      const auto colour = static_cast<std::int32_t>(free - used.begin());
-      if (free == used.end())
-      {
-        used.push_back(0);
         surfaceByColour.emplace_back();
         interiorByColour.emplace_back();
       }
@@ -987,7 +1002,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
       (role == Surface ? surfaceByColour : interiorByColour)[colour].push_back(p);
       (role == Surface ? this->Stats.SurfacePoints : this->Stats.InteriorLayerPoints) += 1;
     }
-    this->Stats.NumberOfColours = static_cast<int>(used.size());
+    this->Stats.NumberOfColours = static_cast<int>(surfaceByColour.size());
   }
   if (executor.ShouldAbort())
   {
@@ -1706,21 +1721,7 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
     std::vector<char> used;
     for (const std::int64_t p : candidates)
     {
-      used.assign(byColour.size(), 0);
-      for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
-      {
-        const IdType* ids = connectivity + this->Incidence.Cells[k] * Corners;
-        for (int v = 0; v <= Dim; ++v)
-        {
-          const std::int32_t colour = colours[static_cast<std::int64_t>(ids[v])];
-          if (colour >= 0)
-          {
-            used[colour] = 1;
-          }
-        }
-      }
-      const auto colour =
-        static_cast<std::int32_t>(std::find(used.begin(), used.end(), 0) - used.begin());
+      const std::int32_t colour = this->FreeColour(connectivity, p, colours, byColour.size(), used);
       if (colour == static_cast<std::int32_t>(byColour.size()))
       {
         byColour.emplace_back();
