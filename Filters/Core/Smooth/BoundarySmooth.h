@@ -1736,9 +1736,8 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
     std::atomic<std::int64_t> improved{ 0 };
     for (const auto& points : byColour)
     {
-      ImproveKernel kernel{ this, &points, connectivity, materials, &projector, false, &badness,
+      ImproveKernel kernel{ this, &points, connectivity, materials, &projector, project, &badness,
         &executor, &improved };
-      kernel.UseProjector = project;
       executor.For(0, static_cast<std::int64_t>(points.size()), 16, kernel);
       if (executor.ShouldAbort())
       {
