@@ -14,6 +14,7 @@
 
 #include "Common/Determinant.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -57,7 +58,8 @@ template <int Dim>
 struct FacetTerms
 {
   double Determinant;
-  double EdgeSum; // sum of the squared edge lengths
+  double EdgeSum;            // sum of the squared edge lengths
+  double LongestEdgeSquared; // the largest squared edge length
   double Normals[Dim + 1][Dim];
   double Squared[Dim + 1]; // |n_i|^2
   double NormalSum;
@@ -99,6 +101,7 @@ void ComputeFacetTerms(const double* const (&corners)[Dim + 1], FacetTerms<Dim>&
       t.Squared[i] = dot(t.Normals[i], t.Normals[i]);
     }
     t.EdgeSum = t.Squared[0] + t.Squared[1] + t.Squared[2];
+    t.LongestEdgeSquared = std::max(t.Squared[0], std::max(t.Squared[1], t.Squared[2]));
     t.NormalSum = t.EdgeSum;
     // Determinant<2>'s expansion, term for term (the same bits).
     t.Determinant = edges[0][0] * edges[1][1] - edges[0][1] * edges[1][0];
@@ -128,9 +131,12 @@ void ComputeFacetTerms(const double* const (&corners)[Dim + 1], FacetTerms<Dim>&
     cross(e[2], e[0], t.Normals[2]);
     cross(e[0], e[1], t.Normals[3]);
     t.EdgeSum = 0.0;
+    t.LongestEdgeSquared = 0.0;
     for (int k = 0; k < 6; ++k)
     {
-      t.EdgeSum += dot(e[k], e[k]);
+      const double squared = dot(e[k], e[k]);
+      t.EdgeSum += squared;
+      t.LongestEdgeSquared = std::max(t.LongestEdgeSquared, squared);
     }
     for (int i = 0; i < 4; ++i)
     {
@@ -320,6 +326,43 @@ SimplexCosines MeasureSimplexCosines(const double* const (&corners)[Dim + 1])
   }
 }
 
+namespace detail
+{
+/// SimplexSurelyWithin on computed terms.
+template <int Dim>
+bool TermsSurelyWithin(const FacetTerms<Dim>& t, double maxCondition, double maxCosine)
+{
+  constexpr double Margin = 1.0 - 1e-12;
+  if (!(t.Determinant > 0.0))
+  {
+    return false;
+  }
+  const double scaled = ConditionScale<Dim>() * t.Determinant * maxCondition;
+  if (!(t.EdgeSum * t.NormalSum <= scaled * scaled * Margin))
+  {
+    return false;
+  }
+  // -n_i . n_j / (|n_i| |n_j|) <= c: true for n_i . n_j >= 0, else (n_i . n_j)^2 <= c^2 s_i s_j.
+  const double squaredCosine = maxCosine * maxCosine * Margin;
+  for (int i = 0; i <= Dim; ++i)
+  {
+    for (int j = i + 1; j <= Dim; ++j)
+    {
+      double product = 0.0;
+      for (int r = 0; r < Dim; ++r)
+      {
+        product += t.Normals[i][r] * t.Normals[j][r];
+      }
+      if (product < 0.0 && !(product * product <= squaredCosine * t.Squared[i] * t.Squared[j]))
+      {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+} // namespace detail
+
 /// Whether the simplex is surely within the bounds: Determinant > 0, Condition <= maxCondition
 /// and LargestDihedralCosine <= maxCosine (maxCosine >= 0), decided for triangles and
 /// tetrahedra by squared comparisons, without the square roots and divisions of the measure,
@@ -336,20 +379,59 @@ bool SimplexSurelyWithin(
     {
       return false;
     }
-    constexpr double Margin = 1.0 - 1e-12;
     detail::FacetTerms<Dim> t;
     detail::ComputeFacetTerms<Dim>(corners, t);
-    if (!(t.Determinant > 0.0))
+    return detail::TermsSurelyWithin<Dim>(t, maxCondition, maxCosine);
+  }
+  else
+  {
+    (void)corners;
+    (void)maxCondition;
+    (void)maxCosine;
+    return false;
+  }
+}
+
+/// SimplexSurelyWithin with a slack: -1 where SimplexSurelyWithin is false, else a distance
+/// R >= 0 such that SimplexSurelyWithin stays true after any moves of the corners whose lengths
+/// add up to at most R. A smoother that moves one corner at a time keeps a budget per cell
+/// from it and skips the measure while the moves fit in the budget (the decisions stay those of
+/// the measure, so the result does not change).
+///
+/// The bounds, for edges that each change by at most R (both ends together):
+/// - the edges: sum|e'|^2 <= (sqrt(sum|e|^2) + sqrt(#edges) R)^2;
+/// - the facet normals (the turned edges of a triangle; cross products of two edges u, v of a
+///   tetrahedron's face) change by at most eps = R, resp. (|u| + |v|) R + R^2 <= 2 L R + R^2,
+///   L the longest edge, hence each turns by at most asin(eps / |n|), and every dihedral angle
+///   shrinks by at most 2 asin(eps / |n|_min);
+/// - the determinant, multilinear in the edges from corner 0, by at most R (|e1| + |e2|) + R^2
+///   for triangles and R (|n1| + |n2| + |n3|) + 3 L R^2 + R^3 for tetrahedra.
+/// The slack keeps a relative margin of 1e-9 to the bounds, far above the 1e-12 with which
+/// SimplexSurelyWithin covers its rounding.
+template <int Dim>
+double SimplexSlack(const double* const (&corners)[Dim + 1], double maxCondition, double maxCosine)
+{
+  if constexpr (Dim == 2 || Dim == 3)
+  {
+    if (!(maxCosine >= 0.0 && maxCosine < 1.0))
     {
-      return false;
+      return -1.0;
     }
-    const double scaled = detail::ConditionScale<Dim>() * t.Determinant * maxCondition;
-    if (!(t.EdgeSum * t.NormalSum <= scaled * scaled * Margin))
+    detail::FacetTerms<Dim> t;
+    detail::ComputeFacetTerms<Dim>(corners, t);
+    if (!detail::TermsSurelyWithin<Dim>(t, maxCondition, maxCosine))
     {
-      return false;
+      return -1.0;
     }
-    // -n_i . n_j / (|n_i| |n_j|) <= c: true for n_i . n_j >= 0, else (n_i . n_j)^2 <= c^2 s_i s_j.
-    const double squaredCosine = maxCosine * maxCosine * Margin;
+    constexpr double Margin = 1e-9;
+    double lengths[Dim + 1];
+    double shortest = std::numeric_limits<double>::infinity();
+    for (int i = 0; i <= Dim; ++i)
+    {
+      lengths[i] = std::sqrt(t.Squared[i]);
+      shortest = std::min(shortest, lengths[i]);
+    }
+    double largestCosine = -1.0;
     for (int i = 0; i <= Dim; ++i)
     {
       for (int j = i + 1; j <= Dim; ++j)
@@ -359,20 +441,67 @@ bool SimplexSurelyWithin(
         {
           product += t.Normals[i][r] * t.Normals[j][r];
         }
-        if (product < 0.0 && !(product * product <= squaredCosine * t.Squared[i] * t.Squared[j]))
-        {
-          return false;
-        }
+        largestCosine = std::max(largestCosine, -product / (lengths[i] * lengths[j]));
       }
     }
-    return true;
+    largestCosine = std::min(1.0, largestCosine + Margin);
+    // The smallest angle's lead over the bound, d = acos(largestCosine) - acos(maxCosine), as
+    // sin d and cos d; every normal may turn by d / 2, and sin(d / 2) >= sin(d) / 2 for d up to
+    // pi / 2, sin(d / 2) >= sin(pi / 4) beyond.
+    const double sine = std::sqrt(1.0 - largestCosine * largestCosine);
+    const double boundSine = std::sqrt(1.0 - maxCosine * maxCosine);
+    const double leadSine = sine * maxCosine - largestCosine * boundSine - Margin;
+    const double leadCosine = largestCosine * maxCosine + sine * boundSine;
+    if (!(leadSine > 0.0))
+    {
+      return 0.0;
+    }
+    const double halfSine = leadCosine >= 0.0 ? 0.5 * leadSine : 0.7071;
+    const double turn = shortest * halfSine; // the largest change of a normal
+    const double longest = std::sqrt(t.LongestEdgeSquared);
+    double slack = Dim == 2 ? turn : turn / (std::sqrt(longest * longest + turn) + longest);
+    // The condition number: the bound grows with R; the largest R in [0, slack] that keeps it,
+    // by bisection from the angle's slack.
+    constexpr double EdgeCount = Dim * (Dim + 1) / 2;
+    const double edgeRoot = std::sqrt(t.EdgeSum), normalRoot = std::sqrt(t.NormalSum);
+    const double limit = detail::ConditionScale<Dim>() * maxCondition * (1.0 - Margin);
+    double corner0 = 0.0; // what multiplies R in the determinant's change
+    if constexpr (Dim == 2)
+    {
+      corner0 = lengths[1] + lengths[2];
+    }
+    else
+    {
+      corner0 = lengths[1] + lengths[2] + lengths[3];
+    }
+    auto keeps = [&](double r)
+    {
+      const double normalChange = Dim == 2 ? r : (2.0 * longest + r) * r;
+      const double determinant = Dim == 2 ? t.Determinant - (corner0 + r) * r
+                                          : t.Determinant - (corner0 + (3.0 * longest + r) * r) * r;
+      return determinant > 0.0 &&
+        (edgeRoot + std::sqrt(EdgeCount) * r) *
+          (normalRoot + std::sqrt(static_cast<double>(Dim + 1)) * normalChange) <=
+        limit * determinant;
+    };
+    if (!keeps(slack))
+    {
+      double low = 0.0, high = slack;
+      for (int step = 0; step < 8; ++step)
+      {
+        const double middle = 0.5 * (low + high);
+        (keeps(middle) ? low : high) = middle;
+      }
+      slack = low;
+    }
+    return slack * (1.0 - 1e-6);
   }
   else
   {
     (void)corners;
     (void)maxCondition;
     (void)maxCosine;
-    return false;
+    return -1.0;
   }
 }
 

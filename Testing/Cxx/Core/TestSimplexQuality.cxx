@@ -192,27 +192,32 @@ void GramReference(const double (&x)[Dim + 1][Dim], double& condition, double& l
   }
 }
 
+/// Corners uniform in [-1, 1]^Dim, and pointers to them.
+template <int Dim>
+void RandomSimplex(
+  std::mt19937& random, double (&x)[Dim + 1][Dim], const double* (&corners)[Dim + 1])
+{
+  std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+  for (int v = 0; v <= Dim; ++v)
+  {
+    for (double& c : x[v])
+    {
+      c = coordinate(random);
+    }
+    corners[v] = x[v];
+  }
+}
+
 template <int Dim>
 void CheckClosedForms()
 {
   std::mt19937 random(11);
-  std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
   int checked = 0, sure = 0;
   for (int trial = 0; trial < 20000; ++trial)
   {
     double x[Dim + 1][Dim];
-    for (auto& point : x)
-    {
-      for (double& c : point)
-      {
-        c = coordinate(random);
-      }
-    }
     const double* corners[Dim + 1];
-    for (int v = 0; v <= Dim; ++v)
-    {
-      corners[v] = x[v];
-    }
+    RandomSimplex<Dim>(random, x, corners);
     const stm::SimplexCosines shape = stm::MeasureSimplexCosines<Dim>(corners);
     if (!(shape.Determinant > 0.0) || shape.Condition > 100.0)
     {
@@ -253,6 +258,96 @@ TEST(SimplexQuality, ClosedFormsAgreeWithTheGramMatrix)
 {
   CheckClosedForms<2>();
   CheckClosedForms<3>();
+}
+
+// Moves of the corners whose lengths add up to the slack keep a simplex surely within the
+// bounds: every corner moved at random with the slack shared at random, and all of it on one
+// corner.
+template <int Dim>
+void CheckSlack()
+{
+  constexpr double MaxCondition = 3.5;
+  const double maxCosine = std::cos(15.0 * 3.14159265358979323846 / 180.0);
+  std::mt19937 random(5);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> gaussian;
+  int withSlack = 0;
+  for (int trial = 0; trial < 20000; ++trial)
+  {
+    double x[Dim + 1][Dim];
+    const double* corners[Dim + 1];
+    RandomSimplex<Dim>(random, x, corners);
+    const double slack = stm::SimplexSlack<Dim>(corners, MaxCondition, maxCosine);
+    ASSERT_EQ(slack >= 0.0, stm::SimplexSurelyWithin<Dim>(corners, MaxCondition, maxCosine));
+    if (slack <= 0.0)
+    {
+      continue;
+    }
+    ++withSlack;
+    for (int move = 0; move < 20; ++move)
+    {
+      double weights[Dim + 1], total = 0.0;
+      for (int v = 0; v <= Dim; ++v)
+      {
+        weights[v] = move < Dim + 1 ? (v == move ? 1.0 : 0.0) : unit(random);
+        total += weights[v];
+      }
+      double moved[Dim + 1][Dim];
+      const double* movedCorners[Dim + 1];
+      for (int v = 0; v <= Dim; ++v)
+      {
+        double direction[Dim], length = 0.0;
+        for (double& c : direction)
+        {
+          c = gaussian(random);
+          length += c * c;
+        }
+        length = std::sqrt(length);
+        for (int c = 0; c < Dim; ++c)
+        {
+          moved[v][c] = x[v][c] + slack * weights[v] / total * direction[c] / length;
+        }
+        movedCorners[v] = moved[v];
+      }
+      ASSERT_TRUE(stm::SimplexSurelyWithin<Dim>(movedCorners, MaxCondition, maxCosine))
+        << "trial " << trial << ", move " << move << ", slack " << slack;
+    }
+  }
+  EXPECT_GT(withSlack, 500);
+}
+
+TEST(SimplexQuality, SlackKeepsTheSimplexWithinTheBounds)
+{
+  CheckSlack<2>();
+  CheckSlack<3>();
+  // Segments and 4-simplices have no closed forms: never a slack.
+  const double segment[2][1] = { { 0.0 }, { 1.0 } };
+  const double* segmentCorners[2] = { segment[0], segment[1] };
+  EXPECT_EQ(stm::SimplexSlack<1>(segmentCorners, 3.5, 0.9), -1.0);
+}
+
+TEST(SimplexQuality, SlackOfRegularSimplices)
+{
+  // Unit edges, the smoother's default bounds: the slack is a sizeable part of an edge (what
+  // lets the smoother skip most measures), and below the distance that breaks the bounds.
+  const double maxCosine = std::cos(15.0 * 3.14159265358979323846 / 180.0);
+  const double h = std::sqrt(3.0) / 2.0;
+  const double triangle[3][2] = { { 0, 0 }, { 1, 0 }, { 0.5, h } };
+  const double* triangleCorners[3] = { triangle[0], triangle[1], triangle[2] };
+  const double triangleSlack = stm::SimplexSlack<2>(triangleCorners, 3.5, maxCosine);
+  EXPECT_GT(triangleSlack, 0.1);
+  EXPECT_LT(triangleSlack, h);
+  const double tetrahedron[4][3] = { { 0, 0, 0 }, { 1, 0, 0 }, { 0.5, h, 0 },
+    { 0.5, h / 3.0, std::sqrt(2.0 / 3.0) } };
+  const double* tetrahedronCorners[4] = { tetrahedron[0], tetrahedron[1], tetrahedron[2],
+    tetrahedron[3] };
+  const double tetrahedronSlack = stm::SimplexSlack<3>(tetrahedronCorners, 3.5, maxCosine);
+  EXPECT_GT(tetrahedronSlack, 0.05);
+  EXPECT_LT(tetrahedronSlack, std::sqrt(2.0 / 3.0));
+  // At the bounds themselves, no slack is left.
+  const stm::SimplexCosines shape = stm::MeasureSimplexCosines<3>(tetrahedronCorners);
+  EXPECT_EQ(
+    stm::SimplexSlack<3>(tetrahedronCorners, shape.Condition * (1.0 + 1e-10), maxCosine), 0.0);
 }
 
 } // namespace
