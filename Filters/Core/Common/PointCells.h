@@ -77,6 +77,56 @@ struct PointCells
     }
     return -1;
   }
+
+  /// FacetNeighbour for every corner at once, into neighbours[corner]: the facets that hold
+  /// corner 0 from corner 0's cells, the one that does not from corner 1's, each list scanned
+  /// once and each candidate's corners compared with the cell's, where a merge per facet would
+  /// read Dim lists per facet.
+  template <class IdType>
+  void AllFacetNeighbours(
+    const IdType* connectivity, std::int64_t cell, std::int64_t (&neighbours)[Corners]) const
+  {
+    const IdType* ids = connectivity + cell * Corners;
+    for (std::int64_t& neighbour : neighbours)
+    {
+      neighbour = -1;
+    }
+    for (int list = 0; list < 2; ++list)
+    {
+      const auto id = static_cast<std::int64_t>(ids[list]);
+      int missing = list == 0 ? Dim : 1; // facets still to find from this list
+      for (std::int64_t k = this->Offsets[id]; k < this->Offsets[id + 1] && missing > 0; ++k)
+      {
+        const std::int64_t candidate = this->Cells[k];
+        if (candidate == cell)
+        {
+          continue;
+        }
+        // Which of the cell's corners the candidate holds, as a bit set.
+        const IdType* other = connectivity + candidate * Corners;
+        unsigned shared = 0;
+        for (int v = 0; v < Corners; ++v)
+        {
+          for (int w = 0; w < Corners; ++w)
+          {
+            shared |= ids[v] == other[w] ? 1u << v : 0u;
+          }
+        }
+        // A facet: every corner but one; from list 0 the one is not corner 0, from list 1 it
+        // is corner 0. Ascending lists, so each facet gets the smallest such cell.
+        const unsigned all = (1u << Corners) - 1u;
+        for (int corner = list == 0 ? 1 : 0; corner < (list == 0 ? Corners : 1); ++corner)
+        {
+          const unsigned facet = all & ~(1u << corner);
+          if (neighbours[corner] < 0 && (shared & facet) == facet)
+          {
+            neighbours[corner] = candidate;
+            --missing;
+          }
+        }
+      }
+    }
+  }
 };
 
 } // namespace stm

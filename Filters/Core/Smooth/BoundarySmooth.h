@@ -886,11 +886,12 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     {
       for (std::int64_t c = begin; c < end; ++c)
       {
-        const IdType* ids = this->Connectivity + c * Corners;
         std::uint8_t surface = 0, fixed = 0, outer = 0;
+        std::int64_t neighbours[Dim + 1];
+        this->Self->Incidence.AllFacetNeighbours(this->Connectivity, c, neighbours);
         for (int i = 0; i <= Dim; ++i)
         {
-          const std::int64_t neighbour = this->Self->Incidence.FacetNeighbour(ids, c, i);
+          const std::int64_t neighbour = neighbours[i];
           if (neighbour < 0)
           {
             ((*this->IsBackground)(c) ? fixed : surface) |= static_cast<std::uint8_t>(1u << i);
