@@ -261,9 +261,9 @@ private:
   };
 
   /// Junctions, after the surface neighbours are known: see the header comment.
-  template <class IdType, class MaterialType>
+  template <class IdType, class MaterialType, class Executor>
   void ConstrainJunctions(const IdType* connectivity, const MaterialType* materials,
-    const std::vector<std::uint8_t>& surfaceMasks);
+    const std::vector<std::uint8_t>& surfaceMasks, Executor& executor);
 
   /// The smallest colour (>= 0) that no point sharing a cell with p has in `colours` (-1: no
   /// colour yet); `numberOfColours` are in use; `used` is scratch.
@@ -371,9 +371,9 @@ private:
 // --- implementation ----------------------------------------------------------------------------
 
 template <int Dim>
-template <class IdType, class MaterialType>
+template <class IdType, class MaterialType, class Executor>
 void BoundarySmoother<Dim>::ConstrainJunctions(const IdType* connectivity,
-  const MaterialType* materials, const std::vector<std::uint8_t>& surfaceMasks)
+  const MaterialType* materials, const std::vector<std::uint8_t>& surfaceMasks, Executor& executor)
 {
   if (Dim < 2 || !materials)
   {
@@ -401,73 +401,82 @@ void BoundarySmoother<Dim>::ConstrainJunctions(const IdType* connectivity,
       return std::equal(this->Face, this->Face + FaceSize, other.Face);
     }
   };
-  // Every surface facet once (an interface from its smaller cell) with its material pair.
-  auto forEachSurfaceFacet = [&](auto&& visit)
+  // Each surface facet's faces of dimension Dim - 2, with the facet's pair: every surface facet
+  // once (an interface from its smaller cell), in parallel over chunks of cells (the records
+  // are sorted next, so their order does not matter).
+  constexpr std::int64_t Chunk = 65536;
+  const std::int64_t chunks = (this->NumberOfCells + Chunk - 1) / Chunk;
+  std::vector<std::vector<Record>> chunkRecords(static_cast<std::size_t>(chunks));
+  struct RecordKernel
   {
-    for (std::int64_t c = 0; c < this->NumberOfCells; ++c)
+    using Scratch = NoScratch;
+    const BoundarySmoother* Self;
+    const IdType* Connectivity;
+    const MaterialType* Materials;
+    const std::uint8_t* SurfaceMasks;
+    std::vector<Record>* Records;
+    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
     {
-      const IdType* ids = connectivity + c * (Dim + 1);
-      for (int i = 0; i <= Dim; ++i)
+      for (std::int64_t chunk = begin; chunk < end; ++chunk)
       {
-        if (!(surfaceMasks[c] >> i & 1))
+        std::vector<Record>& records = this->Records[chunk];
+        const std::int64_t last = std::min(this->Self->NumberOfCells, (chunk + 1) * Chunk);
+        for (std::int64_t c = chunk * Chunk; c < last; ++c)
         {
-          continue;
-        }
-        const std::int64_t neighbour = this->Incidence.FacetNeighbour(ids, c, i);
-        if (neighbour >= 0 && neighbour < c)
-        {
-          continue;
-        }
-        const auto own = static_cast<std::int64_t>(materials[c]);
-        const std::int64_t other =
-          neighbour < 0 ? Outside : static_cast<std::int64_t>(materials[neighbour]);
-        if (!visit(ids, i, std::min(own, other), std::max(own, other)))
-        {
-          return;
+          if (this->SurfaceMasks[c] == 0)
+          {
+            continue;
+          }
+          const IdType* ids = this->Connectivity + c * (Dim + 1);
+          std::int64_t neighbours[Dim + 1];
+          this->Self->Incidence.AllFacetNeighbours(this->Connectivity, c, neighbours);
+          for (int i = 0; i <= Dim; ++i)
+          {
+            const std::int64_t neighbour = neighbours[i];
+            if (!(this->SurfaceMasks[c] >> i & 1) || (neighbour >= 0 && neighbour < c))
+            {
+              continue;
+            }
+            const auto own = static_cast<std::int64_t>(this->Materials[c]);
+            const std::int64_t other =
+              neighbour < 0 ? Outside : static_cast<std::int64_t>(this->Materials[neighbour]);
+            for (int drop = 0; drop <= Dim; ++drop)
+            {
+              if (drop == i)
+              {
+                continue;
+              }
+              Record record{ {}, std::min(own, other), std::max(own, other) };
+              for (int j = 0, f = 0; j <= Dim; ++j)
+              {
+                if (j != i && j != drop)
+                {
+                  record.Face[f++] = static_cast<std::int64_t>(ids[j]);
+                }
+              }
+              std::sort(record.Face, record.Face + FaceSize);
+              records.push_back(record);
+            }
+          }
         }
       }
     }
   };
-  bool oneInterface = true;
-  std::int64_t firstLow = 0, firstHigh = 0;
-  bool seen = false;
-  forEachSurfaceFacet(
-    [&](const IdType*, int, std::int64_t low, std::int64_t high)
-    {
-      oneInterface = !seen || (low == firstLow && high == firstHigh);
-      firstLow = seen ? firstLow : low;
-      firstHigh = seen ? firstHigh : high;
-      seen = true;
-      return oneInterface;
-    });
+  RecordKernel kernel{ this, connectivity, materials, surfaceMasks.data(), chunkRecords.data() };
+  executor.For(0, chunks, 1, kernel);
+  std::vector<Record> records;
+  for (std::vector<Record>& chunk : chunkRecords)
+  {
+    records.insert(records.end(), chunk.begin(), chunk.end());
+    std::vector<Record>().swap(chunk);
+  }
+  const bool oneInterface = std::all_of(records.begin(), records.end(),
+    [&](const Record& record)
+    { return record.Low == records[0].Low && record.High == records[0].High; });
   if (oneInterface)
   {
     return; // one material pair: no junction (the two-material pipeline's case)
   }
-  // Each surface facet's faces of dimension Dim - 2, with the facet's pair.
-  std::vector<Record> records;
-  forEachSurfaceFacet(
-    [&](const IdType* ids, int i, std::int64_t low, std::int64_t high)
-    {
-      for (int drop = 0; drop <= Dim; ++drop)
-      {
-        if (drop == i)
-        {
-          continue;
-        }
-        Record record{ {}, low, high };
-        for (int j = 0, f = 0; j <= Dim; ++j)
-        {
-          if (j != i && j != drop)
-          {
-            record.Face[f++] = static_cast<std::int64_t>(ids[j]);
-          }
-        }
-        std::sort(record.Face, record.Face + FaceSize);
-        records.push_back(record);
-      }
-      return true;
-    });
   std::sort(records.begin(), records.end());
   // Junction faces: faces where surface facets of two or more material pairs meet. In 3D they
   // are the edges of the junction lines; each junction point gets its neighbours along them.
@@ -987,7 +996,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   }
   std::vector<std::int64_t>().swap(pairs);
   std::vector<std::int64_t>().swap(counts);
-  this->ConstrainJunctions(connectivity, materials, surfaceMasks);
+  this->ConstrainJunctions(connectivity, materials, surfaceMasks, executor);
 
   // Interior layers by edge hops from the surface.
   std::vector<std::int64_t> frontier;
