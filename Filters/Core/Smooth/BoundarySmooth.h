@@ -82,28 +82,28 @@
 //   volume spreads that over its whole interface (AAL: 5 of 114 labels over 2% -> none over
 //   0.01%, two rounds).
 // - Quality improvement (issue 7): after the iterations (and the restoration), up to
-// NumberOfImprovementSweeps sweeps
-//   move the smoothable points (surface and interior-layer points) of the cells beyond the
-//   bounds (condition above MaxConditionNumber or dihedral angle below MinDihedralAngle) to
-//   lower the worst "badness" of their incident cells, max(condition / MaxConditionNumber,
-//   MinDihedralAngle / angle), under the same validation as a smoothing move. A point moves
-//   only in the directions that keep the volume of every material around it, and the body's
-//   on the outer boundary, to first order: the complement of the gradients of those volumes at
-//   the point. So an interior-layer point moves freely, an interface point in its tangent
-//   plane, a junction-line point along its line, and a quadruple point not at all; where the
-//   gradients have lower rank than the materials require (a folded interface) the point does
-//   not move. The search is a compass search over every combination of -1, 0 and 1 times those
-//   directions, from a fifth of the point's longest edge down to 1/256 of its shortest, within
-//   0.6 of the longest edge per sweep (a needle's short edge must grow by more than its own
-//   length). The points of a sweep are coloured greedily, so the result does not
-//   depend on the number of threads. The slivers of a multi-material cut sit between junction
-//   lines where the smoothing's targets do not help (AAL, 116 labels: worst condition number
-//   10.7 -> 5.1, smallest dihedral angle 5.7 -> 11.5 degrees). Only in 2D and 3D: the bounds
-//   are those of triangles and tetrahedra, and the 4D measure is too costly for a search.
+//   NumberOfImprovementSweeps sweeps move the smoothable points (surface and interior-layer points)
+//   of the cells beyond the bounds (condition above MaxConditionNumber or dihedral angle below
+//   MinDihedralAngle) to lower the worst "badness" of their incident cells, max(condition /
+//   MaxConditionNumber, MinDihedralAngle / angle), under the same validation as a smoothing move. A
+//   point moves only in the directions that keep the volume of every material around it, and the
+//   body's on the outer boundary, to first order: the complement of the gradients of those volumes
+//   at the point. So an interior-layer point moves freely, an interface point in its tangent plane,
+//   a junction-line point along its line, and a quadruple point not at all; where the gradients
+//   have lower rank than the materials require (a folded interface) the point does not move. The
+//   search is a compass search over every combination of -1, 0 and 1 times those directions, from a
+//   fifth of the point's longest edge down to 1/256 of its shortest, within 0.6 of the longest edge
+//   per sweep (a needle's short edge must grow by more than its own length). The points of a sweep
+//   are coloured greedily, so the result does not depend on the number of threads. The slivers of a
+//   multi-material cut sit between junction lines where the smoothing's targets do not help (AAL,
+//   116 labels: worst condition number 10.7 -> 5.1, smallest dihedral angle 5.7 -> 11.5 degrees).
+//   Only in 2D and 3D: the bounds are those of triangles and tetrahedra, and the 4D measure is too
+//   costly for a search.
 // - SinglePrecision rounds every tentative position to float before validating it, so that a
 //   float point array receives exactly the positions that were validated.
 
 #include "Check/SimplexQuality.h"
+#include "Common/CubeInfo.h"
 #include "Common/Determinant.h"
 #include "Common/Execution.h"
 #include "Common/PointCells.h"
@@ -115,6 +115,7 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <string>
 #include <tuple>
 #include <type_traits>
@@ -265,12 +266,56 @@ private:
   void ConstrainJunctions(const IdType* connectivity, const MaterialType* materials,
     const std::vector<std::uint8_t>& surfaceMasks, Executor& executor);
 
-  /// The smallest colour (>= 0) that no point sharing a cell with p has in `colours` (-1: no
-  /// colour yet); `numberOfColours` are in use; `used` is scratch.
-  template <class IdType>
-  std::int32_t FreeColour(const IdType* connectivity, std::int64_t p,
-    const std::vector<std::int32_t>& colours, std::size_t numberOfColours,
-    std::vector<char>& used) const;
+  /// Adds value(c) to sums[key(c)] for the cells c in order (deterministic sums), with one map
+  /// lookup per run of one key: runs are the rule, cells come leaf by leaf.
+  template <class Key, class Value>
+  static void SumPerKey(
+    std::int64_t cells, Key&& key, Value&& value, std::map<std::int64_t, double>& sums)
+  {
+    auto current = sums.end();
+    for (std::int64_t c = 0; c < cells; ++c)
+    {
+      const std::int64_t k = key(c);
+      if (current == sums.end() || current->first != k)
+      {
+        current = sums.emplace(k, 0.0).first;
+      }
+      current->second += value(c);
+    }
+  }
+
+  /// Greedy colouring in the order of `items`: each gets the smallest colour that no item
+  /// visited by forEachNeighbour(item, visit) has in `colours` (indexed by item, -1: none yet).
+  /// Returns the items by colour; `colours` keeps the colours of `items`.
+  template <class ForEachNeighbour>
+  static std::vector<std::vector<std::int64_t>> GreedyColouring(
+    const std::vector<std::int64_t>& items, std::vector<std::int32_t>& colours,
+    ForEachNeighbour&& forEachNeighbour)
+  {
+    std::vector<std::vector<std::int64_t>> byColour;
+    std::vector<char> used;
+    for (const std::int64_t item : items)
+    {
+      used.assign(byColour.size() + 1, 0);
+      forEachNeighbour(item,
+        [&](std::int64_t other)
+        {
+          if (colours[other] >= 0)
+          {
+            used[colours[other]] = 1;
+          }
+        });
+      const auto colour =
+        static_cast<std::int32_t>(std::find(used.begin(), used.end(), 0) - used.begin());
+      if (colour == static_cast<std::int32_t>(byColour.size()))
+      {
+        byColour.emplace_back();
+      }
+      colours[item] = colour;
+      byColour[colour].push_back(item);
+    }
+    return byColour;
+  }
 
   template <class IdType>
   void CellCorners(const IdType* ids, std::int64_t cell, std::int64_t movedPoint,
@@ -605,28 +650,6 @@ Status BoundarySmoother<Dim>::Validate(double* points, std::int64_t numberOfPoin
 
 template <int Dim>
 template <class IdType>
-std::int32_t BoundarySmoother<Dim>::FreeColour(const IdType* connectivity, std::int64_t p,
-  const std::vector<std::int32_t>& colours, std::size_t numberOfColours,
-  std::vector<char>& used) const
-{
-  used.assign(numberOfColours, 0);
-  for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
-  {
-    const IdType* ids = connectivity + this->Incidence.Cells[k] * (Dim + 1);
-    for (int v = 0; v <= Dim; ++v)
-    {
-      const std::int32_t colour = colours[static_cast<std::int64_t>(ids[v])];
-      if (colour >= 0)
-      {
-        used[colour] = 1;
-      }
-    }
-  }
-  return static_cast<std::int32_t>(std::find(used.begin(), used.end(), 0) - used.begin());
-}
-
-template <int Dim>
-template <class IdType>
 void BoundarySmoother<Dim>::CellCorners(const IdType* ids, std::int64_t cell,
   std::int64_t movedPoint, const double* movedPosition, const double* (&corners)[Dim + 1]) const
 {
@@ -815,18 +838,16 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   {
     worst = 0.0;
     double largestCosine = -1.0;
-    double factorial = 1.0;
-    for (int k = 2; k <= Dim; ++k)
-    {
-      factorial *= k;
-    }
     for (std::int64_t c = 0; c < cells; ++c)
     {
       worst = std::max(worst, this->Shapes[c].Condition);
       largestCosine = std::max(largestCosine, this->Shapes[c].Cosine);
-      const std::int64_t key = materials ? static_cast<std::int64_t>(materials[c]) : background + 1;
-      volumes[key] += this->Determinants[c] / factorial;
     }
+    SumPerKey(
+      cells,
+      [&](std::int64_t c)
+      { return materials ? static_cast<std::int64_t>(materials[c]) : background + 1; },
+      [&](std::int64_t c) { return this->Determinants[c] / Factorial(Dim); }, volumes);
     // What MeasureSimplex reports for the worst cell: acos is monotone, so the angle of the
     // largest cosine is the smallest angle.
     smallest = Dim == 1 || cells == 0 ? 180.0 : DihedralDegrees(largestCosine);
@@ -846,16 +867,10 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   }
   else if (options.VolumeTargetMaterials && materials)
   {
-    double factorial = 1.0;
-    for (int k = 2; k <= Dim; ++k)
-    {
-      factorial *= k;
-    }
-    for (std::int64_t c = 0; c < cells; ++c)
-    {
-      this->Stats.TargetVolumes[options.VolumeTargetMaterials[c]] +=
-        this->Determinants[c] / factorial;
-    }
+    SumPerKey(
+      cells, [&](std::int64_t c) { return options.VolumeTargetMaterials[c]; },
+      [&](std::int64_t c) { return this->Determinants[c] / Factorial(Dim); },
+      this->Stats.TargetVolumes);
   }
   this->ConditionBound = std::min(options.MaxConditionNumber, this->Stats.WorstConditionBefore);
   // The dihedral bound max(MinDihedralAngle, smallest of the input) as a cosine: the input's
@@ -1240,28 +1255,17 @@ void BoundarySmoother<Dim>::MakeBlocks(const IdType* connectivity, std::vector<s
   NeighbourKernel kernel{ this, connectivity, &blocks, blockOf.data(), neighbours.data() };
   executor.For(0, numberOfBlocks, 16, kernel);
   // Greedy colouring in block order.
+  std::vector<std::int64_t> order(static_cast<std::size_t>(numberOfBlocks));
+  std::iota(order.begin(), order.end(), std::int64_t{ 0 });
   std::vector<std::int32_t> colours(static_cast<std::size_t>(numberOfBlocks), -1);
-  std::vector<char> used;
-  blocks.ByColour.clear();
-  for (std::int64_t b = 0; b < numberOfBlocks; ++b)
-  {
-    used.assign(blocks.ByColour.size() + 1, 0);
-    for (const std::int32_t other : neighbours[b])
+  blocks.ByColour = GreedyColouring(order, colours,
+    [&](std::int64_t b, auto&& visit)
     {
-      if (colours[other] >= 0)
+      for (const std::int32_t other : neighbours[b])
       {
-        used[colours[other]] = 1;
+        visit(other);
       }
-    }
-    const auto colour =
-      static_cast<std::int32_t>(std::find(used.begin(), used.end(), 0) - used.begin());
-    if (colour == static_cast<std::int32_t>(blocks.ByColour.size()))
-    {
-      blocks.ByColour.emplace_back();
-    }
-    colours[b] = colour;
-    blocks.ByColour[colour].push_back(b);
-  }
+    });
 }
 
 template <int Dim>
@@ -1333,131 +1337,143 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
     bool UseProjector;
     const double* Targets;
     Executor* Exec;
-    void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
+    // The outcomes of Move besides the accepted attempt (0: in full, 1: half, 2: a quarter).
+    enum : int
+    {
+      Rejected = 3,
+      AtTarget = 4
+    };
+
+    // Moves point p toward its target, validated: in full, else half, else a quarter of it.
+    int Move(Scratch& scratch, std::int64_t p) const
     {
       BoundarySmoother& self = *this->Self;
       const BoundarySmoothOptions& options = self.Options;
+      double* x = self.Points + p * Dim;
+      const double* target = this->Targets + p * Dim;
+      if (std::equal(x, x + Dim, target))
+      {
+        return AtTarget;
+      }
+      const std::int64_t first = self.Incidence.Offsets[p], last = self.Incidence.Offsets[p + 1];
+      double oldWorst = 0.0, oldLargestCosine = -1.0;
+      for (std::int64_t k = first; k < last; ++k)
+      {
+        const Shape& old = self.Shapes[self.Incidence.Cells[k]];
+        oldWorst = std::max(oldWorst, old.Condition);
+        oldLargestCosine = std::max(oldLargestCosine, old.Cosine);
+      }
+      const double conditionLimit = std::max(oldWorst, self.ConditionBound);
+      const double cosineLimit = std::max(oldLargestCosine, self.CosineBound);
+      for (int attempt = 0; attempt < 3; ++attempt)
+      {
+        const double fraction = attempt == 0 ? 1.0 : attempt == 1 ? 0.5 : 0.25;
+        double tentative[Dim];
+        for (int c = 0; c < Dim; ++c)
+        {
+          tentative[c] = x[c] + fraction * (target[c] - x[c]);
+        }
+        if (options.MaxDisplacement > 0.0)
+        {
+          const double* original = self.Original.data() + p * Dim;
+          double squared = 0.0;
+          for (int c = 0; c < Dim; ++c)
+          {
+            squared += (tentative[c] - original[c]) * (tentative[c] - original[c]);
+          }
+          if (squared > options.MaxDisplacement * options.MaxDisplacement)
+          {
+            const double scale = options.MaxDisplacement / std::sqrt(squared);
+            for (int c = 0; c < Dim; ++c)
+            {
+              tentative[c] = original[c] + scale * (tentative[c] - original[c]);
+            }
+          }
+        }
+        if (this->UseProjector && !(*this->Project)(p, static_cast<double*>(tentative)))
+        {
+          continue;
+        }
+        if (options.SinglePrecision)
+        {
+          for (int c = 0; c < Dim; ++c)
+          {
+            tentative[c] = static_cast<double>(static_cast<float>(tentative[c]));
+          }
+        }
+        if (std::equal(x, x + Dim, static_cast<const double*>(tentative)))
+        {
+          continue;
+        }
+        double length = 0.0;
+        for (int c = 0; c < Dim; ++c)
+        {
+          length += (tentative[c] - x[c]) * (tentative[c] - x[c]);
+        }
+        length = std::sqrt(length) * (1.0 + 1e-12);
+        scratch.Shapes.clear();
+        bool valid = true;
+        for (std::int64_t k = first; k < last && valid; ++k)
+        {
+          const std::int64_t cell = self.Incidence.Cells[k];
+          // Most cells are well within the bounds, which a test without roots or divisions
+          // shows, and stay so while the moves of their corners fit in its slack (Shape).
+          const double slack = -self.Shapes[cell].Condition;
+          if (slack >= length)
+          {
+            scratch.Shapes.push_back({ -(slack - length), -1.0 });
+            continue;
+          }
+          const double* corners[Dim + 1];
+          self.CellCorners(this->Connectivity + cell * Corners, cell, p, tentative, corners);
+          const double newSlack = SimplexSlack<Dim>(corners, self.ConditionBound, self.CosineBound);
+          if (newSlack >= 0.0)
+          {
+            scratch.Shapes.push_back({ -newSlack, -1.0 });
+            continue;
+          }
+          const SimplexCosines shape = MeasureSimplexCosines<Dim>(corners);
+          valid = shape.Determinant > 0.0 && shape.Condition <= conditionLimit &&
+            shape.LargestDihedralCosine <= cosineLimit;
+          scratch.Shapes.push_back({ shape.Condition, shape.LargestDihedralCosine });
+        }
+        if (!valid)
+        {
+          continue;
+        }
+        for (int c = 0; c < Dim; ++c)
+        {
+          x[c] = tentative[c];
+        }
+        for (std::int64_t k = first; k < last; ++k)
+        {
+          self.Shapes[self.Incidence.Cells[k]] = scratch.Shapes[k - first];
+        }
+        return attempt;
+      }
+      return Rejected;
+    }
+
+    void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
+    {
       if (this->Exec->ShouldAbort())
       {
         return;
       }
       std::int64_t accepted = 0, reduced = 0, rejected = 0;
       const PointBlocks& blocks = *this->Blocks;
-      for (std::int64_t i = 0, b = begin; b < end; ++b)
+      for (std::int64_t b = begin; b < end; ++b)
       {
         const std::int64_t block = (*this->Colour)[b];
-        for (i = blocks.Offsets[block]; i < blocks.Offsets[block + 1]; ++i)
+        for (std::int64_t i = blocks.Offsets[block]; i < blocks.Offsets[block + 1]; ++i)
         {
-          const std::int64_t p = blocks.Points[i];
-          double* x = self.Points + p * Dim;
-          const double* target = this->Targets + p * Dim;
-          if (std::equal(x, x + Dim, target))
-          {
-            continue;
-          }
-          const std::int64_t first = self.Incidence.Offsets[p],
-                             last = self.Incidence.Offsets[p + 1];
-          double oldWorst = 0.0, oldLargestCosine = -1.0;
-          for (std::int64_t k = first; k < last; ++k)
-          {
-            const Shape& old = self.Shapes[self.Incidence.Cells[k]];
-            oldWorst = std::max(oldWorst, old.Condition);
-            oldLargestCosine = std::max(oldLargestCosine, old.Cosine);
-          }
-          const double conditionLimit = std::max(oldWorst, self.ConditionBound);
-          const double cosineLimit = std::max(oldLargestCosine, self.CosineBound);
-          bool done = false;
-          for (int attempt = 0; attempt < 3 && !done; ++attempt)
-          {
-            const double fraction = attempt == 0 ? 1.0 : attempt == 1 ? 0.5 : 0.25;
-            double tentative[Dim];
-            for (int c = 0; c < Dim; ++c)
-            {
-              tentative[c] = x[c] + fraction * (target[c] - x[c]);
-            }
-            if (options.MaxDisplacement > 0.0)
-            {
-              const double* original = self.Original.data() + p * Dim;
-              double squared = 0.0;
-              for (int c = 0; c < Dim; ++c)
-              {
-                squared += (tentative[c] - original[c]) * (tentative[c] - original[c]);
-              }
-              if (squared > options.MaxDisplacement * options.MaxDisplacement)
-              {
-                const double scale = options.MaxDisplacement / std::sqrt(squared);
-                for (int c = 0; c < Dim; ++c)
-                {
-                  tentative[c] = original[c] + scale * (tentative[c] - original[c]);
-                }
-              }
-            }
-            if (this->UseProjector && !(*this->Project)(p, static_cast<double*>(tentative)))
-            {
-              continue;
-            }
-            if (options.SinglePrecision)
-            {
-              for (int c = 0; c < Dim; ++c)
-              {
-                tentative[c] = static_cast<double>(static_cast<float>(tentative[c]));
-              }
-            }
-            if (std::equal(x, x + Dim, static_cast<const double*>(tentative)))
-            {
-              continue;
-            }
-            double length = 0.0;
-            for (int c = 0; c < Dim; ++c)
-            {
-              length += (tentative[c] - x[c]) * (tentative[c] - x[c]);
-            }
-            length = std::sqrt(length) * (1.0 + 1e-12);
-            scratch.Shapes.clear();
-            bool valid = true;
-            for (std::int64_t k = first; k < last && valid; ++k)
-            {
-              const std::int64_t cell = self.Incidence.Cells[k];
-              // Most cells are well within the bounds, which a test without roots or divisions
-              // shows, and stay so while the moves of their corners fit in its slack (Shape).
-              const double slack = -self.Shapes[cell].Condition;
-              if (slack >= length)
-              {
-                scratch.Shapes.push_back({ -(slack - length), -1.0 });
-                continue;
-              }
-              const double* corners[Dim + 1];
-              self.CellCorners(this->Connectivity + cell * Corners, cell, p, tentative, corners);
-              const double newSlack =
-                SimplexSlack<Dim>(corners, self.ConditionBound, self.CosineBound);
-              if (newSlack >= 0.0)
-              {
-                scratch.Shapes.push_back({ -newSlack, -1.0 });
-                continue;
-              }
-              const SimplexCosines shape = MeasureSimplexCosines<Dim>(corners);
-              valid = shape.Determinant > 0.0 && shape.Condition <= conditionLimit &&
-                shape.LargestDihedralCosine <= cosineLimit;
-              scratch.Shapes.push_back({ shape.Condition, shape.LargestDihedralCosine });
-            }
-            if (!valid)
-            {
-              continue;
-            }
-            for (int c = 0; c < Dim; ++c)
-            {
-              x[c] = tentative[c];
-            }
-            for (std::int64_t k = first; k < last; ++k)
-            {
-              self.Shapes[self.Incidence.Cells[k]] = scratch.Shapes[k - first];
-            }
-            (attempt == 0 ? accepted : reduced) += 1;
-            done = true;
-          }
-          rejected += !done;
+          const int outcome = this->Move(scratch, blocks.Points[i]);
+          accepted += outcome == 0;
+          reduced += outcome == 1 || outcome == 2;
+          rejected += outcome == Rejected;
         }
       }
+      BoundarySmoother& self = *this->Self;
       self.Accepted += accepted;
       self.Reduced += reduced;
       self.Rejected += rejected;
@@ -1510,7 +1526,6 @@ bool BoundarySmoother<Dim>::VolumeGradients(const IdType* connectivity,
   gradients.clear();
   outer = this->OnOuterBoundary[p] != 0;
   scale = 0.0;
-  const double* x = this->Points + p * Dim;
   for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
   {
     const std::int64_t cell = this->Incidence.Cells[k];
@@ -1519,29 +1534,6 @@ bool BoundarySmoother<Dim>::VolumeGradients(const IdType* connectivity,
     {
       return false; // a degenerate input cell: no move of its points is ever validated
     }
-    int own = 0;
-    while (static_cast<std::int64_t>(ids[own]) != p)
-    {
-      ++own;
-    }
-    // The determinant is affine in each corner: a unit step per axis gives its gradient.
-    const double* corners[Dim + 1];
-    double shifted[Dim];
-    std::copy(x, x + Dim, shifted);
-    this->CellCorners(ids, cell, p, shifted, corners);
-    auto determinant = [&]()
-    {
-      double edges[Dim][Dim];
-      for (int col = 0; col < Dim; ++col)
-      {
-        for (int r = 0; r < Dim; ++r)
-        {
-          edges[r][col] = corners[col + 1][r] - corners[0][r];
-        }
-      }
-      return Determinant<Dim>(edges);
-    };
-    const double base = determinant();
     const std::int64_t material = materials ? static_cast<std::int64_t>(materials[cell]) : 0;
     auto found = std::find_if(gradients.begin(), gradients.end(),
       [&](const MaterialGradient& g) { return g.Material == material; });
@@ -1550,13 +1542,12 @@ bool BoundarySmoother<Dim>::VolumeGradients(const IdType* connectivity,
       gradients.push_back(MaterialGradient{ material, {} });
       found = gradients.end() - 1;
     }
+    double cellGradient[Dim];
+    this->CornerGradient(ids, cell, p, cellGradient);
     for (int axis = 0; axis < Dim; ++axis)
     {
-      shifted[axis] += 1.0;
-      const double component = determinant() - base;
-      shifted[axis] = x[axis];
-      found->Vector[axis] += component;
-      scale += std::abs(component);
+      found->Vector[axis] += cellGradient[axis];
+      scale += std::abs(cellGradient[axis]);
     }
   }
   return true;
@@ -1920,18 +1911,18 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
     {
       break;
     }
-    std::vector<std::vector<std::int64_t>> byColour;
-    std::vector<char> used;
-    for (const std::int64_t p : candidates)
-    {
-      const std::int32_t colour = this->FreeColour(connectivity, p, colours, byColour.size(), used);
-      if (colour == static_cast<std::int32_t>(byColour.size()))
+    const std::vector<std::vector<std::int64_t>> byColour = GreedyColouring(candidates, colours,
+      [&](std::int64_t p, auto&& visit)
       {
-        byColour.emplace_back();
-      }
-      colours[p] = colour;
-      byColour[colour].push_back(p);
-    }
+        for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
+        {
+          const IdType* ids = connectivity + this->Incidence.Cells[k] * Corners;
+          for (int v = 0; v <= Dim; ++v)
+          {
+            visit(static_cast<std::int64_t>(ids[v]));
+          }
+        }
+      });
     for (const std::int64_t p : candidates)
     {
       colours[p] = -1;
@@ -1965,11 +1956,7 @@ Status BoundarySmoother<Dim>::RestoreVolumes(const PointBlocks& surfaceBlocks,
   constexpr std::int64_t Corners = Dim + 1;
   constexpr std::int64_t Outside = std::numeric_limits<std::int64_t>::min();
   const std::map<std::int64_t, double>& targets = this->Stats.TargetVolumes;
-  double factorial = 1.0;
-  for (int k = 2; k <= Dim; ++k)
-  {
-    factorial *= k;
-  }
+  const double factorial = Factorial(Dim);
   // Per-cell volumes in parallel, then summed per material in cell order (deterministic).
   std::vector<double> cellVolumes(static_cast<std::size_t>(this->NumberOfCells));
   struct VolumeKernel
@@ -2002,17 +1989,9 @@ Status BoundarySmoother<Dim>::RestoreVolumes(const PointBlocks& surfaceBlocks,
     VolumeKernel kernel{ this, connectivity, cellVolumes.data(), factorial };
     executor.For(0, this->NumberOfCells, 4096, kernel);
     volumes.clear();
-    auto current = volumes.end();
-    for (std::int64_t c = 0; c < this->NumberOfCells; ++c)
-    {
-      // Runs of one material are the rule (cells come leaf by leaf): one lookup per run.
-      const auto material = static_cast<std::int64_t>(materials[c]);
-      if (current == volumes.end() || current->first != material)
-      {
-        current = volumes.emplace(material, 0.0).first;
-      }
-      current->second += cellVolumes[c];
-    }
+    SumPerKey(
+      this->NumberOfCells, [&](std::int64_t c) { return static_cast<std::int64_t>(materials[c]); },
+      [&](std::int64_t c) { return cellVolumes[c]; }, volumes);
     // Over the materials that have cells and a target (a target material the cut did not keep
     // is no interface's to restore).
     double largest = 0.0;
