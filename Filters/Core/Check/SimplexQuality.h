@@ -505,6 +505,27 @@ double SimplexSlack(const double* const (&corners)[Dim + 1], double maxCondition
   }
 }
 
+/// MeasureSimplexCosines's Condition alone (the same bits): for the callers that rank simplices
+/// by condition number only, without the dihedral cosines' square roots.
+template <int Dim>
+double SimplexCondition(const double* const (&corners)[Dim + 1])
+{
+  if constexpr (Dim == 2 || Dim == 3)
+  {
+    detail::FacetTerms<Dim> t;
+    detail::ComputeFacetTerms<Dim>(corners, t);
+    if (!(t.Determinant > 0.0))
+    {
+      return std::numeric_limits<double>::infinity();
+    }
+    return std::sqrt(t.EdgeSum * t.NormalSum) / (detail::ConditionScale<Dim>() * t.Determinant);
+  }
+  else
+  {
+    return MeasureSimplexCosines<Dim>(corners).Condition;
+  }
+}
+
 /// Measures the simplex with the given Dim + 1 corners of Dim coordinates each.
 template <int Dim>
 SimplexShape<Dim> MeasureSimplex(const double* const (&corners)[Dim + 1])

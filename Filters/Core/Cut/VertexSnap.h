@@ -237,7 +237,7 @@ private:
   static Claim ComputeClaim(const Mesh<IdType>& mesh, std::int64_t v);
   template <class IdType>
   static double WorstPieceCondition(const Mesh<IdType>& mesh, std::int64_t cell, std::int64_t v,
-    const double* position, double value);
+    const double* position, double value, double limit);
 
   std::vector<std::uint8_t> Moved;
   std::vector<std::uint8_t> Refused;
@@ -287,11 +287,13 @@ typename VertexSnap<Dim>::Claim VertexSnap<Dim>::ComputeClaim(
 /// The worst condition number of the simplices MarchingSimplices makes of one cell, with vertex
 /// v at `position` with f = `value` (its class from the value). Cut vertices are numbered after
 /// every input point in the order of their edges, so within one cell their ranks among the cell's
-/// edges reproduce the global pulling order.
+/// edges reproduce the global pulling order. Once a piece is worse than `limit`, the rest are
+/// not measured: the result is then some figure above `limit`, which is all a caller comparing
+/// with `limit` needs.
 template <int Dim>
 template <class IdType>
-double VertexSnap<Dim>::WorstPieceCondition(
-  const Mesh<IdType>& mesh, std::int64_t cell, std::int64_t v, const double* position, double value)
+double VertexSnap<Dim>::WorstPieceCondition(const Mesh<IdType>& mesh, std::int64_t cell,
+  std::int64_t v, const double* position, double value, double limit)
 {
   using Info = SimplexCutInfo<Dim>;
   const IdType* ids = mesh.CellIds(cell);
@@ -327,7 +329,7 @@ double VertexSnap<Dim>::WorstPieceCondition(
     {
       std::swap(corners[0], corners[1]);
     }
-    return MeasureSimplex<Dim>(corners).Condition;
+    return SimplexCondition<Dim>(corners);
   };
   if (Info::CutEdgeCounts[caseIndex] == 0)
   {
@@ -374,6 +376,10 @@ double VertexSnap<Dim>::WorstPieceCondition(
   ForEachPiece<Dim>(caseIndex, CutSide::Inside, globalId,
     [&](const PieceVertex* simplex, CutSide)
     {
+      if (worst > limit)
+      {
+        return;
+      }
       const double* corners[Dim + 1];
       for (int k = 0; k <= Dim; ++k)
       {
@@ -789,13 +795,14 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     return true;
   };
   // The worst condition number of the pieces the cut makes of v's cells with v at position
-  // and f(v) = value.
-  auto localWorst = [&](std::int64_t v, const double* position, double value)
+  // and f(v) = value; past `limit` (an option that has lost already) some figure above it.
+  constexpr double NoLimit = std::numeric_limits<double>::infinity();
+  auto localWorst = [&](std::int64_t v, const double* position, double value, double limit)
   {
     double worst = 0.0;
-    for (std::int64_t j = offsets[v]; j < offsets[v + 1]; ++j)
+    for (std::int64_t j = offsets[v]; j < offsets[v + 1] && !(worst > limit); ++j)
     {
-      worst = std::max(worst, WorstPieceCondition(mesh, incident[j], v, position, value));
+      worst = std::max(worst, WorstPieceCondition(mesh, incident[j], v, position, value, limit));
     }
     return worst;
   };
@@ -870,7 +877,7 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
         continue;
       }
       outcome = WorseQuality;
-      const double snapped = localWorst(v, candidate, iso);
+      const double snapped = localWorst(v, candidate, iso, best);
       if (snap || !snapOnTie ? snapped < best : snapped <= best)
       {
         best = snapped;
@@ -886,7 +893,7 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     const double nudged = nudgedValue(v, edges);
     if (nudged != values[v])
     {
-      const double worst = localWorst(v, points + v * Dim, nudged);
+      const double worst = localWorst(v, points + v * Dim, nudged, best);
       if (worst < best)
       {
         best = worst;
@@ -913,8 +920,8 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
       {
         // Compared with the plain cut: against the nudged cut it refuses more snaps and ends
         // worse (measured on the AAL brain mask).
-        const double snapped = localWorst(v, position, iso);
-        if (snapped > qualityBound && !(snapped <= localWorst(v, x, values[v])))
+        const double snapped = localWorst(v, position, iso, NoLimit);
+        if (snapped > qualityBound && !(snapped <= localWorst(v, x, values[v], NoLimit)))
         {
           outcome = WorseQuality;
         }
@@ -934,7 +941,7 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     }
     // QualityDriven: the best of keeping the cut, snapping along one of the cut edges of
     // distance <= 1/2 and nudging; on a tie, snapping (the nearest edge first), then cutting.
-    double best = localWorst(v, x, values[v]);
+    double best = localWorst(v, x, values[v], NoLimit);
     double value = values[v];
     std::int64_t other = -1;
     const Outcome outcome = improve(v, edges, allZero, true, best, position, value, other);
@@ -1100,7 +1107,7 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
           for (std::int64_t i = begin; i < end; ++i)
           {
             const std::int64_t p = activePoints[slots[i]];
-            worst[slots[i]] = localWorst(p, points + p * Dim, values[p]);
+            worst[slots[i]] = localWorst(p, points + p * Dim, values[p], NoLimit);
           }
         });
     };
@@ -1159,7 +1166,7 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
           : difference > tolerance                                  ? VertexClass::Positive
                                                                     : VertexClass::Zero);
       double best = worst[slot];
-      const double cut = localWorst(v, first, firstValue);
+      const double cut = localWorst(v, first, firstValue, best);
       const bool backToCut = cut < best;
       best = std::min(best, cut);
       collectEdges(v, edges);

@@ -254,6 +254,38 @@ void CheckClosedForms()
   EXPECT_EQ(sure, checked);
 }
 
+// SimplexCondition is MeasureSimplex's condition number, bit for bit, inverted and flat
+// simplices included.
+template <int Dim>
+void CheckConditionAlone()
+{
+  std::mt19937 random(17);
+  int inverted = 0;
+  for (int trial = 0; trial < 5000; ++trial)
+  {
+    double x[Dim + 1][Dim];
+    const double* corners[Dim + 1];
+    RandomSimplex<Dim>(random, x, corners);
+    if (trial % 100 == 0)
+    {
+      std::copy(x[0], x[0] + Dim, x[1]); // flat
+    }
+    const double condition = stm::SimplexCondition<Dim>(corners);
+    const stm::SimplexShape<Dim> shape = stm::MeasureSimplex<Dim>(corners);
+    ASSERT_EQ(condition, shape.Condition) << "trial " << trial;
+    inverted += std::isinf(condition) ? 1 : 0;
+  }
+  EXPECT_GT(inverted, 500);
+}
+
+TEST(SimplexQuality, ConditionAloneIsTheMeasuresCondition)
+{
+  CheckConditionAlone<1>();
+  CheckConditionAlone<2>();
+  CheckConditionAlone<3>();
+  CheckConditionAlone<4>();
+}
+
 TEST(SimplexQuality, ClosedFormsAgreeWithTheGramMatrix)
 {
   CheckClosedForms<2>();
