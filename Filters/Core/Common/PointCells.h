@@ -6,6 +6,7 @@
 // its facets, for the algorithms that walk a mesh's facets (boundary smoothing, interface
 // extraction).
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -78,53 +79,93 @@ struct PointCells
     return -1;
   }
 
-  /// FacetNeighbour for every corner at once, into neighbours[corner]: the facets that hold
-  /// corner 0 from corner 0's cells, the one that does not from corner 1's, each list scanned
-  /// once and each candidate's corners compared with the cell's, where a merge per facet would
-  /// read Dim lists per facet.
-  template <class IdType>
-  void AllFacetNeighbours(
-    const IdType* connectivity, std::int64_t cell, std::int64_t (&neighbours)[Corners]) const
+  /// One cell's side of a facet around a point p (ForEachFacetAt): the facet's other points,
+  /// ascending, the cell and its corner opposite the facet.
+  struct FacetEntry
   {
-    const IdType* ids = connectivity + cell * Corners;
-    for (std::int64_t& neighbour : neighbours)
+    static constexpr int OtherPoints = Dim - 1;
+    std::int64_t Others[OtherPoints > 0 ? OtherPoints : 1];
+    std::int64_t Cell;
+    int Corner;
+
+    bool SameFacet(const FacetEntry& other) const
     {
-      neighbour = -1;
-    }
-    for (int list = 0; list < 2; ++list)
-    {
-      const auto id = static_cast<std::int64_t>(ids[list]);
-      int missing = list == 0 ? Dim : 1; // facets still to find from this list
-      for (std::int64_t k = this->Offsets[id]; k < this->Offsets[id + 1] && missing > 0; ++k)
+      for (int k = 0; k < OtherPoints; ++k)
       {
-        const std::int64_t candidate = this->Cells[k];
-        if (candidate == cell)
+        if (this->Others[k] != other.Others[k])
+        {
+          return false;
+        }
+      }
+      return true;
+    }
+    bool operator<(const FacetEntry& other) const
+    {
+      for (int k = 0; k < OtherPoints; ++k)
+      {
+        if (this->Others[k] != other.Others[k])
+        {
+          return this->Others[k] < other.Others[k];
+        }
+      }
+      return this->Cell < other.Cell;
+    }
+  };
+
+  /// The facets that hold point p, grouped: visit(first, last) gets, per facet, the entries of
+  /// the cells that hold it, ascending by cell (one on the outer boundary, two inside a
+  /// conforming mesh). Only the facets that keep(cell, corner) accepts take part, and with
+  /// smallestOnly only those whose smallest point is p. A facet of a cell around p that holds
+  /// p is in the other cell's list too, so a pass over all points with smallestOnly visits
+  /// every facet of the mesh once, and reads the corners of each point's cells once (a search
+  /// per cell reads those of the cells around several of its points). entries: scratch.
+  template <class IdType, class Keep, class Visit>
+  void ForEachFacetAt(const IdType* connectivity, std::int64_t p, bool smallestOnly,
+    std::vector<FacetEntry>& entries, Keep&& keep, Visit&& visit) const
+  {
+    entries.clear();
+    for (std::int64_t k = this->Offsets[p]; k < this->Offsets[p + 1]; ++k)
+    {
+      const std::int64_t cell = this->Cells[k];
+      const IdType* ids = connectivity + cell * Corners;
+      for (int corner = 0; corner < Corners; ++corner)
+      {
+        if (static_cast<std::int64_t>(ids[corner]) == p || !keep(cell, corner))
         {
           continue;
         }
-        // Which of the cell's corners the candidate holds, as a bit set.
-        const IdType* other = connectivity + candidate * Corners;
-        unsigned shared = 0;
-        for (int v = 0; v < Corners; ++v)
+        FacetEntry entry;
+        entry.Cell = cell;
+        entry.Corner = corner;
+        int count = 0;
+        bool smallest = true;
+        for (int j = 0; j < Corners; ++j)
         {
-          for (int w = 0; w < Corners; ++w)
+          const auto id = static_cast<std::int64_t>(ids[j]);
+          if (j != corner && id != p)
           {
-            shared |= ids[v] == other[w] ? 1u << v : 0u;
+            smallest = smallest && id > p;
+            entry.Others[count++] = id;
           }
         }
-        // A facet: every corner but one; from list 0 the one is not corner 0, from list 1 it
-        // is corner 0. Ascending lists, so each facet gets the smallest such cell.
-        const unsigned all = (1u << Corners) - 1u;
-        for (int corner = list == 0 ? 1 : 0; corner < (list == 0 ? Corners : 1); ++corner)
+        if (smallestOnly && !smallest)
         {
-          const unsigned facet = all & ~(1u << corner);
-          if (neighbours[corner] < 0 && (shared & facet) == facet)
-          {
-            neighbours[corner] = candidate;
-            --missing;
-          }
+          continue;
         }
+        std::sort(entry.Others, entry.Others + FacetEntry::OtherPoints);
+        entries.push_back(entry);
       }
+    }
+    std::sort(entries.begin(), entries.end());
+    for (std::size_t first = 0; first < entries.size();)
+    {
+      std::size_t last = first + 1;
+      while (last < entries.size() && entries[last].SameFacet(entries[first]))
+      {
+        ++last;
+      }
+      visit(entries.data() + first, entries.data() + last);
+      first = last;
     }
   }
 };

@@ -115,6 +115,7 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <string>
 #include <tuple>
@@ -424,135 +425,144 @@ void BoundarySmoother<Dim>::ConstrainJunctions(const IdType* connectivity,
   {
     return;
   }
-  constexpr int FaceSize = Dim < 2 ? 1 : Dim - 1; // points of a face of a surface facet
+  // Junction faces: faces of dimension Dim - 2 where surface facets of two or more material
+  // pairs meet (in 3D the edges of the junction lines, in 2D points). Every surface facet that
+  // holds a face holds the face's smallest point, so each point p finds the faces it is the
+  // smallest point of from its own cells' surface facets: in parallel over chunks of points,
+  // each chunk listing its junction faces' points (3D: the line edges, both ways).
+  constexpr int FaceOthers = Dim > 2 ? Dim - 2 : 0; // points of a face besides its smallest
   constexpr std::int64_t Outside = std::numeric_limits<std::int64_t>::min();
-  struct Record
+  struct FaceRecord
   {
-    std::int64_t Face[FaceSize];
+    std::int64_t Others[FaceOthers > 0 ? FaceOthers : 1];
     std::int64_t Low, High; // the facet's material pair (Outside: the outer boundary)
-    bool operator<(const Record& other) const
+    bool SameFace(const FaceRecord& other) const
     {
-      for (int k = 0; k < FaceSize; ++k)
+      return std::equal(this->Others, this->Others + FaceOthers, other.Others);
+    }
+    bool operator<(const FaceRecord& other) const
+    {
+      for (int k = 0; k < FaceOthers; ++k)
       {
-        if (this->Face[k] != other.Face[k])
+        if (this->Others[k] != other.Others[k])
         {
-          return this->Face[k] < other.Face[k];
+          return this->Others[k] < other.Others[k];
         }
       }
       return std::tie(this->Low, this->High) < std::tie(other.Low, other.High);
     }
-    bool SameFace(const Record& other) const
-    {
-      return std::equal(this->Face, this->Face + FaceSize, other.Face);
-    }
   };
-  // Each surface facet's faces of dimension Dim - 2, with the facet's pair: every surface facet
-  // once (an interface from its smaller cell), in parallel over chunks of cells (the records
-  // are sorted next, so their order does not matter).
-  constexpr std::int64_t Chunk = 65536;
-  const std::int64_t chunks = (this->NumberOfCells + Chunk - 1) / Chunk;
-  std::vector<std::vector<Record>> chunkRecords(static_cast<std::size_t>(chunks));
-  struct RecordKernel
+  constexpr std::int64_t Chunk = 16384;
+  const std::int64_t chunks = (this->NumberOfPoints + Chunk - 1) / Chunk;
+  std::vector<std::vector<std::int64_t>> chunkPoints(static_cast<std::size_t>(chunks));
+  struct JunctionKernel
   {
-    using Scratch = NoScratch;
+    using Entry = typename PointCells<Dim>::FacetEntry;
+    struct Scratch
+    {
+      std::vector<Entry> Entries;
+      std::vector<FaceRecord> Records;
+    };
     const BoundarySmoother* Self;
     const IdType* Connectivity;
     const MaterialType* Materials;
     const std::uint8_t* SurfaceMasks;
-    std::vector<Record>* Records;
-    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    std::vector<std::int64_t>* Points; // per chunk: junction face points (3D: edge pairs)
+    void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
     {
       for (std::int64_t chunk = begin; chunk < end; ++chunk)
       {
-        std::vector<Record>& records = this->Records[chunk];
-        const std::int64_t last = std::min(this->Self->NumberOfCells, (chunk + 1) * Chunk);
-        for (std::int64_t c = chunk * Chunk; c < last; ++c)
+        const std::int64_t last = std::min(this->Self->NumberOfPoints, (chunk + 1) * Chunk);
+        for (std::int64_t p = chunk * Chunk; p < last; ++p)
         {
-          if (this->SurfaceMasks[c] == 0)
+          if (this->Self->Roles[p] != Surface && this->Self->Roles[p] != Fixed)
           {
-            continue;
+            continue; // on no surface facet
           }
-          const IdType* ids = this->Connectivity + c * (Dim + 1);
-          std::int64_t neighbours[Dim + 1];
-          this->Self->Incidence.AllFacetNeighbours(this->Connectivity, c, neighbours);
-          for (int i = 0; i <= Dim; ++i)
-          {
-            const std::int64_t neighbour = neighbours[i];
-            if (!(this->SurfaceMasks[c] >> i & 1) || (neighbour >= 0 && neighbour < c))
-            {
-              continue;
-            }
-            const auto own = static_cast<std::int64_t>(this->Materials[c]);
-            const std::int64_t other =
-              neighbour < 0 ? Outside : static_cast<std::int64_t>(this->Materials[neighbour]);
-            for (int drop = 0; drop <= Dim; ++drop)
-            {
-              if (drop == i)
-              {
-                continue;
-              }
-              Record record{ {}, std::min(own, other), std::max(own, other) };
-              for (int j = 0, f = 0; j <= Dim; ++j)
-              {
-                if (j != i && j != drop)
-                {
-                  record.Face[f++] = static_cast<std::int64_t>(ids[j]);
-                }
-              }
-              std::sort(record.Face, record.Face + FaceSize);
-              records.push_back(record);
-            }
-          }
+          this->Junctions(scratch, p, this->Points[chunk]);
         }
+      }
+    }
+    void Junctions(Scratch& scratch, std::int64_t p, std::vector<std::int64_t>& out) const
+    {
+      scratch.Records.clear();
+      this->Self->Incidence.ForEachFacetAt(
+        this->Connectivity, p, false, scratch.Entries,
+        [this](std::int64_t cell, int corner) { return (this->SurfaceMasks[cell] >> corner) & 1; },
+        [&](const Entry* first, const Entry* last)
+        {
+          const auto own = static_cast<std::int64_t>(this->Materials[first->Cell]);
+          const std::int64_t other =
+            last - first == 1 ? Outside : static_cast<std::int64_t>(this->Materials[first[1].Cell]);
+          // The facet's faces through p of which p is the smallest point: drop one other point.
+          for (int drop = 0; drop < Dim - 1; ++drop)
+          {
+            FaceRecord record{ {}, std::min(own, other), std::max(own, other) };
+            bool smallest = true;
+            for (int k = 0, f = 0; k < Dim - 1; ++k)
+            {
+              if (k != drop)
+              {
+                smallest = smallest && first->Others[k] > p;
+                record.Others[f++] = first->Others[k];
+              }
+            }
+            if (smallest)
+            {
+              scratch.Records.push_back(record);
+            }
+          }
+        });
+      std::sort(scratch.Records.begin(), scratch.Records.end());
+      const std::vector<FaceRecord>& records = scratch.Records;
+      for (std::size_t first = 0; first < records.size();)
+      {
+        std::size_t last = first + 1;
+        bool junction = false;
+        while (last < records.size() && records[last].SameFace(records[first]))
+        {
+          junction = junction || records[last].Low != records[first].Low ||
+            records[last].High != records[first].High;
+          ++last;
+        }
+        if (junction)
+        {
+          out.push_back(p);
+          out.insert(out.end(), records[first].Others, records[first].Others + FaceOthers);
+        }
+        first = last;
       }
     }
   };
-  RecordKernel kernel{ this, connectivity, materials, surfaceMasks.data(), chunkRecords.data() };
+  JunctionKernel kernel{ this, connectivity, materials, surfaceMasks.data(), chunkPoints.data() };
   executor.For(0, chunks, 1, kernel);
-  std::vector<Record> records;
-  for (std::vector<Record>& chunk : chunkRecords)
+  std::vector<std::int64_t> facePoints;
+  for (std::vector<std::int64_t>& chunk : chunkPoints)
   {
-    records.insert(records.end(), chunk.begin(), chunk.end());
-    std::vector<Record>().swap(chunk);
+    facePoints.insert(facePoints.end(), chunk.begin(), chunk.end());
+    std::vector<std::int64_t>().swap(chunk);
   }
-  const bool oneInterface = std::all_of(records.begin(), records.end(),
-    [&](const Record& record)
-    { return record.Low == records[0].Low && record.High == records[0].High; });
-  if (oneInterface)
+  if constexpr (Dim != 3)
   {
-    return; // one material pair: no junction (the two-material pipeline's case)
-  }
-  std::sort(records.begin(), records.end());
-  // Junction faces: faces where surface facets of two or more material pairs meet. In 3D they
-  // are the edges of the junction lines; each junction point gets its neighbours along them.
-  std::vector<std::pair<std::int64_t, std::int64_t>> lineEdges;
-  for (std::size_t first = 0; first < records.size();)
-  {
-    std::size_t last = first + 1;
-    bool junction = false;
-    while (last < records.size() && records[last].SameFace(records[first]))
+    // 2D: a junction point; 4D: the points of a junction face are not smoothed along their
+    // surface.
+    std::sort(facePoints.begin(), facePoints.end());
+    facePoints.erase(std::unique(facePoints.begin(), facePoints.end()), facePoints.end());
+    for (const std::int64_t p : facePoints)
     {
-      junction = junction || records[last].Low != records[first].Low ||
-        records[last].High != records[first].High;
-      ++last;
-    }
-    if (junction)
-    {
-      for (int k = 0; k < FaceSize; ++k)
+      if (this->Roles[p] == Surface)
       {
-        const std::int64_t p = records[first].Face[k];
-        if constexpr (Dim == 3)
-        {
-          lineEdges.emplace_back(p, records[first].Face[1 - k]);
-        }
-        else if (this->Roles[p] == Surface)
-        {
-          this->Roles[p] = Fixed; // 2D: a junction point; 4D: not smoothed along its surface
-          ++this->Stats.JunctionCornerPoints;
-        }
+        this->Roles[p] = Fixed;
+        ++this->Stats.JunctionCornerPoints;
       }
     }
-    first = last;
+    return;
+  }
+  std::vector<std::pair<std::int64_t, std::int64_t>> lineEdges;
+  for (std::size_t k = 0; k + 1 < facePoints.size(); k += 2)
+  {
+    lineEdges.emplace_back(facePoints[k], facePoints[k + 1]);
+    lineEdges.emplace_back(facePoints[k + 1], facePoints[k]);
   }
   if (lineEdges.empty())
   {
@@ -892,52 +902,90 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   executor.ReportProgress(0.05);
 
   // Facets: per cell, which of its facets (bit i: the facet opposite corner i) are surface
-  // facets and which are fixed outer-boundary facets.
-  std::vector<std::uint8_t> surfaceMasks(static_cast<std::size_t>(cells), 0);
-  std::vector<std::uint8_t> fixedMasks(static_cast<std::size_t>(cells), 0);
-  std::vector<std::uint8_t> outerMasks(static_cast<std::size_t>(cells), 0);
+  // facets, fixed outer-boundary facets and outer-boundary facets, each facet found once from
+  // its smallest point. A cell's facets are found from several points, possibly on several
+  // threads, so the three masks share one atomic word per cell while they are made.
+  const std::unique_ptr<std::atomic<std::uint16_t>[]> facetBits(
+    new std::atomic<std::uint16_t>[static_cast<std::size_t>(cells)]);
   struct FacetKernel
   {
-    using Scratch = NoScratch;
+    using Entry = typename PointCells<Dim>::FacetEntry;
+    struct Scratch
+    {
+      std::vector<Entry> Entries;
+    };
+    enum : int
+    {
+      FixedShift = Dim + 1,
+      OuterShift = 2 * (Dim + 1)
+    };
     const BoundarySmoother* Self;
     const IdType* Connectivity;
-    std::uint8_t* SurfaceMasks;
-    std::uint8_t* FixedMasks;
-    std::uint8_t* OuterMasks;
+    std::atomic<std::uint16_t>* Bits;
     const decltype(isBackground)* IsBackground;
     const decltype(sameMaterial)* SameMaterial;
+    void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
+    {
+      auto mark = [this](const Entry& entry, int shift)
+      {
+        this->Bits[entry.Cell].fetch_or(
+          static_cast<std::uint16_t>(1u << (entry.Corner + shift)), std::memory_order_relaxed);
+      };
+      for (std::int64_t p = begin; p < end; ++p)
+      {
+        this->Self->Incidence.ForEachFacetAt(
+          this->Connectivity, p, true, scratch.Entries, [](std::int64_t, int) { return true; },
+          [&](const Entry* first, const Entry* last)
+          {
+            if (last - first == 1)
+            {
+              mark(*first, OuterShift);
+              mark(*first, (*this->IsBackground)(first->Cell) ? FixedShift : 0);
+              return;
+            }
+            // Beyond two cells (not conforming), each takes the smallest other one.
+            for (const Entry* entry = first; entry != last; ++entry)
+            {
+              const std::int64_t neighbour = entry == first ? first[1].Cell : first->Cell;
+              if (!(*this->SameMaterial)(entry->Cell, neighbour))
+              {
+                mark(*entry, 0);
+              }
+            }
+          });
+      }
+    }
+  };
+  struct ClearKernel
+  {
+    using Scratch = NoScratch;
+    std::atomic<std::uint16_t>* Bits;
     void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
     {
       for (std::int64_t c = begin; c < end; ++c)
       {
-        std::uint8_t surface = 0, fixed = 0, outer = 0;
-        std::int64_t neighbours[Dim + 1];
-        this->Self->Incidence.AllFacetNeighbours(this->Connectivity, c, neighbours);
-        for (int i = 0; i <= Dim; ++i)
-        {
-          const std::int64_t neighbour = neighbours[i];
-          if (neighbour < 0)
-          {
-            ((*this->IsBackground)(c) ? fixed : surface) |= static_cast<std::uint8_t>(1u << i);
-            outer |= static_cast<std::uint8_t>(1u << i);
-          }
-          else if (!(*this->SameMaterial)(c, neighbour))
-          {
-            surface |= static_cast<std::uint8_t>(1u << i);
-          }
-        }
-        this->SurfaceMasks[c] = surface;
-        this->FixedMasks[c] = fixed;
-        this->OuterMasks[c] = outer;
+        this->Bits[c].store(0, std::memory_order_relaxed);
       }
     }
   };
-  FacetKernel facets{ this, connectivity, surfaceMasks.data(), fixedMasks.data(), outerMasks.data(),
-    &isBackground, &sameMaterial };
-  executor.For(0, cells, 4096, facets);
+  ClearKernel clear{ facetBits.get() };
+  executor.For(0, cells, 1 << 16, clear);
+  FacetKernel facets{ this, connectivity, facetBits.get(), &isBackground, &sameMaterial };
+  executor.For(0, numberOfPoints, 4096, facets);
   if (executor.ShouldAbort())
   {
     return Status::Aborted();
+  }
+  std::vector<std::uint8_t> surfaceMasks(static_cast<std::size_t>(cells));
+  std::vector<std::uint8_t> fixedMasks(static_cast<std::size_t>(cells));
+  std::vector<std::uint8_t> outerMasks(static_cast<std::size_t>(cells));
+  constexpr unsigned CornerBits = (1u << Corners) - 1u;
+  for (std::int64_t c = 0; c < cells; ++c)
+  {
+    const unsigned bits = facetBits[c].load(std::memory_order_relaxed);
+    surfaceMasks[c] = static_cast<std::uint8_t>(bits & CornerBits);
+    fixedMasks[c] = static_cast<std::uint8_t>(bits >> FacetKernel::FixedShift & CornerBits);
+    outerMasks[c] = static_cast<std::uint8_t>(bits >> FacetKernel::OuterShift & CornerBits);
   }
 
   // Roles, and the surface neighbours: edges of surface facets, counted with repeats, then
