@@ -1106,8 +1106,11 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
         {
           for (std::int64_t i = begin; i < end; ++i)
           {
+            // Only the points above RevisitAbove need their exact worst; most are below.
             const std::int64_t p = activePoints[slots[i]];
-            worst[slots[i]] = localWorst(p, points + p * Dim, values[p], NoLimit);
+            const double below = localWorst(p, points + p * Dim, values[p], RevisitAbove);
+            worst[slots[i]] =
+              below > RevisitAbove ? localWorst(p, points + p * Dim, values[p], NoLimit) : below;
           }
         });
     };
