@@ -904,9 +904,10 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   // Facets: per cell, which of its facets (bit i: the facet opposite corner i) are surface
   // facets, fixed outer-boundary facets and outer-boundary facets, each facet found once from
   // its smallest point. A cell's facets are found from several points, possibly on several
-  // threads, so the three masks share one atomic word per cell while they are made.
+  // threads, so the three masks share one atomic word per cell while they are made (zeroed by
+  // the value-initialization).
   const std::unique_ptr<std::atomic<std::uint16_t>[]> facetBits(
-    new std::atomic<std::uint16_t>[static_cast<std::size_t>(cells)]);
+    new std::atomic<std::uint16_t>[static_cast<std::size_t>(cells)]());
   struct FacetKernel
   {
     using Entry = typename PointCells<Dim>::FacetEntry;
@@ -956,20 +957,6 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
       }
     }
   };
-  struct ClearKernel
-  {
-    using Scratch = NoScratch;
-    std::atomic<std::uint16_t>* Bits;
-    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
-    {
-      for (std::int64_t c = begin; c < end; ++c)
-      {
-        this->Bits[c].store(0, std::memory_order_relaxed);
-      }
-    }
-  };
-  ClearKernel clear{ facetBits.get() };
-  executor.For(0, cells, 1 << 16, clear);
   FacetKernel facets{ this, connectivity, facetBits.get(), &isBackground, &sameMaterial };
   executor.For(0, numberOfPoints, 4096, facets);
   if (executor.ShouldAbort())
