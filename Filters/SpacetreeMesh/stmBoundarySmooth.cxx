@@ -185,6 +185,8 @@ void stmBoundarySmooth::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "MaxConditionNumber: " << this->MaxConditionNumber << "\n";
   os << indent << "MinDihedralAngle: " << this->MinDihedralAngle << "\n";
   os << indent << "NumberOfImprovementSweeps: " << this->NumberOfImprovementSweeps << "\n";
+  os << indent
+     << "ImprovementMovesInterfaces: " << (this->ImprovementMovesInterfaces ? "On" : "Off") << "\n";
   os << indent << "RestoreOriginalVolumes: " << (this->RestoreOriginalVolumes ? "On" : "Off")
      << "\n";
   os << indent << "BackgroundMaterial: " << this->BackgroundMaterial << "\n";
@@ -287,6 +289,7 @@ int stmBoundarySmooth::RequestData(
   request.Options.MaxConditionNumber = this->MaxConditionNumber;
   request.Options.MinDihedralAngle = this->MinDihedralAngle;
   request.Options.NumberOfImprovementSweeps = this->NumberOfImprovementSweeps;
+  request.Options.ImprovementMovesInterfaces = this->ImprovementMovesInterfaces;
   for (vtkIdType t = 0;
        this->RestoreOriginalVolumes && targetVolumes && t < targetVolumes->GetNumberOfTuples(); ++t)
   {

@@ -23,7 +23,8 @@
  * Optionally (RestoreOriginalVolumes), the interfaces then move along their normals to give
  * every material back its original volume. Last, NumberOfImprovementSweeps sweeps move the
  * points of the cells still beyond the quality bounds to improve them, in the directions that
- * keep every material's volume (along interfaces and junction lines).
+ * keep every material's volume (along interfaces and junction lines), then, where cells are
+ * still beyond them (ImprovementMovesInterfaces), moving interface points off their interface.
  *
  * Input: a vtkUnstructuredGrid of only tetrahedra (3D) or only triangles in a plane (2D), e.g.
  * the output of stmMarchingSimplices, with the cell array "Material" (without it, every cell is
@@ -145,6 +146,20 @@ public:
 
   ///@{
   /**
+   * Whether, when the improvement sweeps that keep the volumes leave cells beyond the quality
+   * bounds, as many sweeps again may move the interface points of those cells (between exactly
+   * two materials, the outside counting as one) in every direction, off their interface: a
+   * needle over a short edge between interface points cannot widen within the tangent planes.
+   * The volumes change by a negligible amount; junction-line points still move only along their
+   * lines, quadruple points not at all. Off keeps every interface exactly. Default on.
+   */
+  vtkSetMacro(ImprovementMovesInterfaces, bool);
+  vtkGetMacro(ImprovementMovesInterfaces, bool);
+  vtkBooleanMacro(ImprovementMovesInterfaces, bool);
+  ///@}
+
+  ///@{
+  /**
    * Whether, after the iterations, the interfaces move along their normals so that every
    * material gets back its original volume: the field array "OriginalMaterialVolumes" (pairs
    * of material and volume, which stmMultiMaterialCut writes: each material's volume before
@@ -230,6 +245,7 @@ private:
   double MaxConditionNumber = 3.5;
   double MinDihedralAngle = 15.0;
   int NumberOfImprovementSweeps = 10;
+  bool ImprovementMovesInterfaces = true;
   bool RestoreOriginalVolumes = false;
   int BackgroundMaterial = 0;
   bool ProjectToFunction = false;

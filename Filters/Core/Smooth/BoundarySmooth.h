@@ -97,6 +97,14 @@
 //   are coloured greedily, so the result does not depend on the number of threads. The slivers of a
 //   multi-material cut sit between junction lines where the smoothing's targets do not help (AAL,
 //   116 labels: worst condition number 10.7 -> 5.1, smallest dihedral angle 5.7 -> 11.5 degrees).
+//   With ImprovementMovesInterfaces, when those sweeps end with cells still beyond the bounds,
+//   as many sweeps again let the interface points (between exactly two materials, the outside
+//   counting as one) move in every direction, off their interface: a needle whose corners are
+//   interface points over a short edge cannot widen within the tangent planes, and a move of a
+//   point next to a bad cell changes the volumes by a negligible amount (AAL, 116 labels: worst
+//   condition number 4.76 -> 4.43, smallest dihedral angle 13.7 -> 14.7 degrees; the largest
+//   volume error stays below 0.005%). Junction-line points still move only along their lines
+//   and quadruple points not at all.
 //   Only in 2D and 3D: the bounds are those of triangles and tetrahedra, and the 4D measure is too
 //   costly for a search.
 // - SinglePrecision rounds every tentative position to float before validating it, so that a
@@ -150,6 +158,9 @@ struct BoundarySmoothOptions
   double MinDihedralAngle = 15.0;
   /// Sweeps of the quality improvement after the iterations (header comment), >= 0.
   int NumberOfImprovementSweeps = 10;
+  /// Whether further improvement sweeps may move interface points off their interface where
+  /// cells stay beyond the bounds (header comment).
+  bool ImprovementMovesInterfaces = true;
   /// Volume restoration (header comment), which needs materials: the target volume per
   /// material, or when that is empty, per cell the material whose target volume the cell's
   /// input volume counts toward (e.g. its material before a cut; nullptr: no restoration).
@@ -380,10 +391,11 @@ private:
     std::vector<MaterialGradient>& gradients, bool& outer, double& scale) const;
 
   /// The directions (orthonormal, at most Dim) in which point p may move in the improvement:
-  /// those that keep every material's volume, and the body's, to first order.
+  /// those that keep every material's volume, and the body's, to first order; with
+  /// `offInterface`, every direction for a point between exactly two materials.
   template <class IdType, class MaterialType>
   int FreeDirections(const IdType* connectivity, const MaterialType* materials, std::int64_t p,
-    double (&directions)[Dim][Dim]) const;
+    bool offInterface, double (&directions)[Dim][Dim]) const;
 
   Status Validate(double* points, std::int64_t numberOfPoints, std::int64_t numberOfCells,
     const BoundarySmoothOptions& options) const;
@@ -1591,7 +1603,7 @@ bool BoundarySmoother<Dim>::VolumeGradients(const IdType* connectivity,
 template <int Dim>
 template <class IdType, class MaterialType>
 int BoundarySmoother<Dim>::FreeDirections(const IdType* connectivity, const MaterialType* materials,
-  std::int64_t p, double (&directions)[Dim][Dim]) const
+  std::int64_t p, bool offInterface, double (&directions)[Dim][Dim]) const
 {
   std::vector<MaterialGradient> gradients;
   bool outer = false;
@@ -1599,6 +1611,17 @@ int BoundarySmoother<Dim>::FreeDirections(const IdType* connectivity, const Mate
   if (!this->VolumeGradients(connectivity, materials, p, gradients, outer, scale))
   {
     return 0;
+  }
+  if (offInterface && gradients.size() + (outer ? 1 : 0) == 2)
+  {
+    for (int q = 0; q < Dim; ++q)
+    {
+      for (int c = 0; c < Dim; ++c)
+      {
+        directions[q][c] = q == c ? 1.0 : 0.0;
+      }
+    }
+    return Dim;
   }
   double total[Dim] = {};
   for (const MaterialGradient& g : gradients)
@@ -1748,6 +1771,7 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
     const decltype(badness)* Badness;
     Executor* Exec;
     std::atomic<std::int64_t>* Improved;
+    bool OffInterface;
 
     // The incident cells' worst badness with p at y, or infinity when a cell breaks the limits.
     double Evaluate(Scratch& scratch, std::int64_t p, const double* y, double conditionLimit,
@@ -1782,7 +1806,8 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
       {
         const std::int64_t p = (*this->Points)[i];
         double directions[Dim][Dim];
-        const int count = self.FreeDirections(this->Connectivity, this->Materials, p, directions);
+        const int count = self.FreeDirections(
+          this->Connectivity, this->Materials, p, this->OffInterface, directions);
         if (count == 0)
         {
           continue;
@@ -1920,63 +1945,68 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
   };
 
   std::vector<std::int32_t> colours(static_cast<std::size_t>(this->NumberOfPoints), -1);
-  for (int sweep = 0; sweep < options.NumberOfImprovementSweeps; ++sweep)
+  const int phases = options.ImprovementMovesInterfaces ? 2 : 1;
+  // Phase 0 keeps the volumes; phase 1 (ImprovementMovesInterfaces) frees interface points.
+  for (int phase = 0; phase < phases; ++phase)
   {
-    // The movable points of the cells outside the bounds, coloured greedily in point order.
-    std::vector<std::int64_t> candidates;
-    for (std::int64_t c = 0; c < this->NumberOfCells; ++c)
+    for (int sweep = 0; sweep < options.NumberOfImprovementSweeps; ++sweep)
     {
-      if (!isBad(this->Shapes[c]))
+      // The movable points of the cells outside the bounds, coloured greedily in point order.
+      std::vector<std::int64_t> candidates;
+      for (std::int64_t c = 0; c < this->NumberOfCells; ++c)
       {
-        continue;
-      }
-      const IdType* ids = connectivity + c * Corners;
-      for (int v = 0; v <= Dim; ++v)
-      {
-        const auto id = static_cast<std::int64_t>(ids[v]);
-        if (this->Roles[id] == Surface || this->Roles[id] == InteriorLayer)
+        if (!isBad(this->Shapes[c]))
         {
-          candidates.push_back(id);
+          continue;
         }
-      }
-    }
-    std::sort(candidates.begin(), candidates.end());
-    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-    if (candidates.empty())
-    {
-      break;
-    }
-    const std::vector<std::vector<std::int64_t>> byColour = GreedyColouring(candidates, colours,
-      [&](std::int64_t p, auto&& visit)
-      {
-        for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
+        const IdType* ids = connectivity + c * Corners;
+        for (int v = 0; v <= Dim; ++v)
         {
-          const IdType* ids = connectivity + this->Incidence.Cells[k] * Corners;
-          for (int v = 0; v <= Dim; ++v)
+          const auto id = static_cast<std::int64_t>(ids[v]);
+          if (this->Roles[id] == Surface || this->Roles[id] == InteriorLayer)
           {
-            visit(static_cast<std::int64_t>(ids[v]));
+            candidates.push_back(id);
           }
         }
-      });
-    for (const std::int64_t p : candidates)
-    {
-      colours[p] = -1;
-    }
-    std::atomic<std::int64_t> improved{ 0 };
-    for (const auto& points : byColour)
-    {
-      ImproveKernel kernel{ this, &points, connectivity, materials, &projector, project, &badness,
-        &executor, &improved };
-      executor.For(0, static_cast<std::int64_t>(points.size()), 16, kernel);
-      if (executor.ShouldAbort())
-      {
-        return Status::Aborted();
       }
-    }
-    this->Stats.ImprovedPoints += improved;
-    if (improved == 0)
-    {
-      break;
+      std::sort(candidates.begin(), candidates.end());
+      candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+      if (candidates.empty())
+      {
+        return Status::Ok();
+      }
+      const std::vector<std::vector<std::int64_t>> byColour = GreedyColouring(candidates, colours,
+        [&](std::int64_t p, auto&& visit)
+        {
+          for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
+          {
+            const IdType* ids = connectivity + this->Incidence.Cells[k] * Corners;
+            for (int v = 0; v <= Dim; ++v)
+            {
+              visit(static_cast<std::int64_t>(ids[v]));
+            }
+          }
+        });
+      for (const std::int64_t p : candidates)
+      {
+        colours[p] = -1;
+      }
+      std::atomic<std::int64_t> improved{ 0 };
+      for (const auto& points : byColour)
+      {
+        ImproveKernel kernel{ this, &points, connectivity, materials, &projector, project, &badness,
+          &executor, &improved, phase == 1 };
+        executor.For(0, static_cast<std::int64_t>(points.size()), 16, kernel);
+        if (executor.ShouldAbort())
+        {
+          return Status::Aborted();
+        }
+      }
+      this->Stats.ImprovedPoints += improved;
+      if (improved == 0)
+      {
+        break;
+      }
     }
   }
   return Status::Ok();
