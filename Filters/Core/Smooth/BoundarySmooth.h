@@ -1093,58 +1093,71 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
 
   // Edge neighbours of the interior-layer points (their Laplacian targets), sorted by id, once:
   // gathering and sorting them from the incident cells at every pass cost more than the moves.
-  // Counted in parallel, then filled in parallel at the counted offsets.
+  // In parallel over chunks of points, each into its own list; a point's ids are made unique
+  // with a per-thread stamp per point before the sort, so only the unique ones are sorted.
+  constexpr std::int64_t EdgeChunk = 4096;
+  const std::int64_t edgeChunks = (numberOfPoints + EdgeChunk - 1) / EdgeChunk;
+  std::vector<std::vector<std::int64_t>> chunkNeighbours(static_cast<std::size_t>(edgeChunks));
+  this->EdgeOffsets.assign(static_cast<std::size_t>(numberOfPoints) + 1, 0);
   struct EdgeKernel
   {
-    using Scratch = typename BoundarySmoother::Scratch;
+    struct Scratch
+    {
+      std::vector<std::int64_t> Stamps; // per point: the last point whose ids included it
+      std::vector<std::int64_t> Ids;
+    };
     BoundarySmoother* Self;
     const IdType* Connectivity;
-    bool Fill;
+    std::vector<std::int64_t>* Chunks;
     void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
     {
       BoundarySmoother& self = *this->Self;
-      for (std::int64_t p = begin; p < end; ++p)
+      scratch.Stamps.resize(static_cast<std::size_t>(self.NumberOfPoints), -1);
+      for (std::int64_t chunk = begin; chunk < end; ++chunk)
       {
-        if (self.Roles[p] != InteriorLayer)
+        std::vector<std::int64_t>& out = this->Chunks[chunk];
+        const std::int64_t last = std::min(self.NumberOfPoints, (chunk + 1) * EdgeChunk);
+        for (std::int64_t p = chunk * EdgeChunk; p < last; ++p)
         {
-          continue;
-        }
-        scratch.Ids.clear();
-        for (std::int64_t k = self.Incidence.Offsets[p]; k < self.Incidence.Offsets[p + 1]; ++k)
-        {
-          const IdType* ids = this->Connectivity + self.Incidence.Cells[k] * Corners;
-          for (int v = 0; v <= Dim; ++v)
+          if (self.Roles[p] != InteriorLayer)
           {
-            if (static_cast<std::int64_t>(ids[v]) != p)
+            continue;
+          }
+          scratch.Ids.clear();
+          scratch.Stamps[p] = p;
+          for (std::int64_t k = self.Incidence.Offsets[p]; k < self.Incidence.Offsets[p + 1]; ++k)
+          {
+            const IdType* ids = this->Connectivity + self.Incidence.Cells[k] * Corners;
+            for (int v = 0; v <= Dim; ++v)
             {
-              scratch.Ids.push_back(static_cast<std::int64_t>(ids[v]));
+              const auto id = static_cast<std::int64_t>(ids[v]);
+              if (scratch.Stamps[id] != p)
+              {
+                scratch.Stamps[id] = p;
+                scratch.Ids.push_back(id);
+              }
             }
           }
-        }
-        std::sort(scratch.Ids.begin(), scratch.Ids.end());
-        scratch.Ids.erase(std::unique(scratch.Ids.begin(), scratch.Ids.end()), scratch.Ids.end());
-        if (this->Fill)
-        {
-          std::copy(scratch.Ids.begin(), scratch.Ids.end(),
-            self.EdgeNeighbours.begin() + self.EdgeOffsets[p]);
-        }
-        else
-        {
+          std::sort(scratch.Ids.begin(), scratch.Ids.end());
+          out.insert(out.end(), scratch.Ids.begin(), scratch.Ids.end());
           self.EdgeOffsets[p + 1] = static_cast<std::int64_t>(scratch.Ids.size());
         }
       }
     }
   };
-  this->EdgeOffsets.assign(static_cast<std::size_t>(numberOfPoints) + 1, 0);
-  EdgeKernel edges{ this, connectivity, false };
-  executor.For(0, numberOfPoints, 4096, edges);
+  EdgeKernel edges{ this, connectivity, chunkNeighbours.data() };
+  executor.For(0, edgeChunks, 1, edges);
   for (std::int64_t p = 0; p < numberOfPoints; ++p)
   {
     this->EdgeOffsets[p + 1] += this->EdgeOffsets[p];
   }
-  this->EdgeNeighbours.assign(static_cast<std::size_t>(this->EdgeOffsets.back()), 0);
-  edges.Fill = true;
-  executor.For(0, numberOfPoints, 4096, edges);
+  this->EdgeNeighbours.clear();
+  this->EdgeNeighbours.reserve(static_cast<std::size_t>(this->EdgeOffsets.back()));
+  for (std::vector<std::int64_t>& chunk : chunkNeighbours)
+  {
+    this->EdgeNeighbours.insert(this->EdgeNeighbours.end(), chunk.begin(), chunk.end());
+    std::vector<std::int64_t>().swap(chunk);
+  }
   if (executor.ShouldAbort())
   {
     return Status::Aborted();
@@ -1266,18 +1279,24 @@ void BoundarySmoother<Dim>::MakeBlocks(const IdType* connectivity, std::vector<s
   std::vector<std::vector<std::int32_t>> neighbours(static_cast<std::size_t>(numberOfBlocks));
   struct NeighbourKernel
   {
-    using Scratch = NoScratch;
+    struct Scratch
+    {
+      std::vector<std::int64_t> Stamps; // per block: the last block whose list included it
+    };
     const BoundarySmoother* Self;
     const IdType* Connectivity;
     const PointBlocks* Blocks;
     const std::int32_t* BlockOf;
     std::vector<std::int32_t>* Neighbours;
-    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    std::int64_t NumberOfBlocks;
+    void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
     {
       const BoundarySmoother& self = *this->Self;
+      scratch.Stamps.resize(static_cast<std::size_t>(this->NumberOfBlocks), -1);
       for (std::int64_t b = begin; b < end; ++b)
       {
         std::vector<std::int32_t>& around = this->Neighbours[b];
+        scratch.Stamps[b] = b;
         for (std::int64_t i = this->Blocks->Offsets[b]; i < this->Blocks->Offsets[b + 1]; ++i)
         {
           const std::int64_t p = this->Blocks->Points[i];
@@ -1287,19 +1306,20 @@ void BoundarySmoother<Dim>::MakeBlocks(const IdType* connectivity, std::vector<s
             for (int v = 0; v <= Dim; ++v)
             {
               const std::int32_t other = this->BlockOf[static_cast<std::int64_t>(ids[v])];
-              if (other >= 0 && other != b)
+              if (other >= 0 && scratch.Stamps[other] != b)
               {
+                scratch.Stamps[other] = b;
                 around.push_back(other);
               }
             }
           }
         }
         std::sort(around.begin(), around.end());
-        around.erase(std::unique(around.begin(), around.end()), around.end());
       }
     }
   };
-  NeighbourKernel kernel{ this, connectivity, &blocks, blockOf.data(), neighbours.data() };
+  NeighbourKernel kernel{ this, connectivity, &blocks, blockOf.data(), neighbours.data(),
+    numberOfBlocks };
   executor.For(0, numberOfBlocks, 16, kernel);
   // Greedy colouring in block order.
   std::vector<std::int64_t> order(static_cast<std::size_t>(numberOfBlocks));
