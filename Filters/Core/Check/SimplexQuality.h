@@ -60,6 +60,9 @@ struct FacetTerms
   double Determinant;
   double EdgeSum;            // sum of the squared edge lengths
   double LongestEdgeSquared; // the largest squared edge length
+  // Tetrahedra: the squared edges x1 - x0, x2 - x0, x3 - x0, x2 - x1, x3 - x1, x3 - x2 (for
+  // triangles, Squared holds them).
+  double EdgeSquared[Dim == 3 ? 6 : 1];
   double Normals[Dim + 1][Dim];
   double Squared[Dim + 1]; // |n_i|^2
   double NormalSum;
@@ -135,6 +138,7 @@ void ComputeFacetTerms(const double* const (&corners)[Dim + 1], FacetTerms<Dim>&
     for (int k = 0; k < 6; ++k)
     {
       const double squared = dot(e[k], e[k]);
+      t.EdgeSquared[k] = squared;
       t.EdgeSum += squared;
       t.LongestEdgeSquared = std::max(t.LongestEdgeSquared, squared);
     }
@@ -400,10 +404,10 @@ bool SimplexSurelyWithin(
 ///
 /// The bounds, for edges that each change by at most R (both ends together):
 /// - the edges: sum|e'|^2 <= (sqrt(sum|e|^2) + sqrt(#edges) R)^2;
-/// - the facet normals (the turned edges of a triangle; cross products of two edges u, v of a
-///   tetrahedron's face) change by at most eps = R, resp. (|u| + |v|) R + R^2 <= 2 L R + R^2,
-///   L the longest edge, hence each turns by at most asin(eps / |n|), and every dihedral angle
-///   shrinks by at most 2 asin(eps / |n|_min);
+/// - the facet normals (the turned edges of a triangle; for a tetrahedron's face, up to its
+///   sign, the cross product of any two of its edges, so of its two shortest, u and v) change
+///   by at most eps = R, resp. eps_k = (|u| + |v|) R + R^2, hence each turns by at most
+///   asin(eps_k / |n_k|), and every dihedral angle shrinks by at most twice the largest turn;
 /// - the determinant, multilinear in the edges from corner 0, by at most R (|e1| + |e2|) + R^2
 ///   for triangles and R (|n1| + |n2| + |n3|) + 3 L R^2 + R^3 for tetrahedra.
 /// The slack keeps a relative margin of 1e-9 to the bounds, far above the 1e-12 with which
@@ -457,11 +461,32 @@ double SimplexSlack(const double* const (&corners)[Dim + 1], double maxCondition
       return 0.0;
     }
     const double halfSine = leadCosine >= 0.0 ? 0.5 * leadSine : 0.7071;
-    const double turn = shortest * halfSine; // the largest change of a normal
+    // Per facet k the largest R with eps_k <= |n_k| sin(d / 2); faceEdges is the largest
+    // |u| + |v| of a facet (what multiplies R in every normal's change).
+    double slack = shortest * halfSine;
+    double faceEdges = 0.0;
+    if constexpr (Dim == 3)
+    {
+      constexpr int Edges[4][3] = { { 3, 4, 5 }, { 1, 2, 5 }, { 0, 2, 4 }, { 0, 1, 3 } };
+      double edgeLengths[6];
+      for (int k = 0; k < 6; ++k)
+      {
+        edgeLengths[k] = std::sqrt(t.EdgeSquared[k]);
+      }
+      slack = std::numeric_limits<double>::infinity();
+      for (int k = 0; k <= Dim; ++k)
+      {
+        const double a = edgeLengths[Edges[k][0]], b = edgeLengths[Edges[k][1]],
+                     c = edgeLengths[Edges[k][2]];
+        const double sum = a + b + c - std::max(a, std::max(b, c));
+        faceEdges = std::max(faceEdges, sum);
+        const double turn = lengths[k] * halfSine; // the largest change of n_k
+        slack = std::min(slack, turn / (0.5 * sum + std::sqrt(0.25 * sum * sum + turn)));
+      }
+    }
     const double longest = std::sqrt(t.LongestEdgeSquared);
-    double slack = Dim == 2 ? turn : turn / (std::sqrt(longest * longest + turn) + longest);
     // The condition number: the bound grows with R; the largest R in [0, slack] that keeps it,
-    // by bisection from the angle's slack.
+    // from the angle's slack, found by regula falsi (below).
     constexpr double EdgeCount = Dim * (Dim + 1) / 2;
     const double edgeRoot = std::sqrt(t.EdgeSum), normalRoot = std::sqrt(t.NormalSum);
     const double limit = detail::ConditionScale<Dim>() * maxCondition * (1.0 - Margin);
@@ -474,23 +499,45 @@ double SimplexSlack(const double* const (&corners)[Dim + 1], double maxCondition
     {
       corner0 = lengths[1] + lengths[2] + lengths[3];
     }
-    auto keeps = [&](double r)
+    // At a distance r: limit det(r) - the product of the bounds of the edge and normal sums,
+    // which must be >= 0 with det(r) > 0. It is concave in r (the product of the growing bounds
+    // is convex, the determinant's bound concave).
+    struct Bound
     {
-      const double normalChange = Dim == 2 ? r : (2.0 * longest + r) * r;
+      double Determinant;
+      double Margin;
+      bool Keeps() const { return this->Determinant > 0.0 && this->Margin >= 0.0; }
+    };
+    auto bound = [&](double r)
+    {
+      const double normalChange = Dim == 2 ? r : (faceEdges + r) * r;
       const double determinant = Dim == 2 ? t.Determinant - (corner0 + r) * r
                                           : t.Determinant - (corner0 + (3.0 * longest + r) * r) * r;
-      return determinant > 0.0 &&
-        (edgeRoot + std::sqrt(EdgeCount) * r) *
-          (normalRoot + std::sqrt(static_cast<double>(Dim + 1)) * normalChange) <=
-        limit * determinant;
+      return Bound{ determinant,
+        limit * determinant -
+          (edgeRoot + std::sqrt(EdgeCount) * r) *
+            (normalRoot + std::sqrt(static_cast<double>(Dim + 1)) * normalChange) };
     };
-    if (!keeps(slack))
+    const Bound atSlack = bound(slack);
+    if (!atSlack.Keeps())
     {
-      double low = 0.0, high = slack;
-      for (int step = 0; step < 8; ++step)
+      // Regula falsi from below: on a concave margin the chord's zero between a point where it
+      // is positive and one where it is not never passes the root.
+      double low = 0.0, high = slack, lowMargin = bound(low).Margin, highMargin = atSlack.Margin;
+      for (int step = 0; step < 4 && lowMargin > 0.0 && highMargin < lowMargin; ++step)
       {
-        const double middle = 0.5 * (low + high);
-        (keeps(middle) ? low : high) = middle;
+        const double middle = low + lowMargin * (high - low) / (lowMargin - highMargin);
+        const Bound atMiddle = bound(middle);
+        if (atMiddle.Keeps())
+        {
+          low = middle;
+          lowMargin = atMiddle.Margin;
+        }
+        else
+        {
+          high = middle;
+          highMargin = atMiddle.Margin;
+        }
       }
       slack = low;
     }

@@ -376,6 +376,12 @@ TEST(SimplexQuality, SlackOfRegularSimplices)
   const double tetrahedronSlack = stm::SimplexSlack<3>(tetrahedronCorners, 3.5, maxCosine);
   EXPECT_GT(tetrahedronSlack, 0.05);
   EXPECT_LT(tetrahedronSlack, std::sqrt(2.0 / 3.0));
+  // The checkerboard's corner tetrahedron (right angles at the origin): each facet's normal is
+  // bounded through its own two shortest edges (the unit legs), not twice the longest edge of
+  // the tetrahedron (sqrt 2), which gave 0.109.
+  const double corner[4][3] = { { 0, 0, 0 }, { 1, 0, 0 }, { 0, 1, 0 }, { 0, 0, 1 } };
+  const double* cornerCorners[4] = { corner[0], corner[1], corner[2], corner[3] };
+  EXPECT_GT(stm::SimplexSlack<3>(cornerCorners, 3.5, maxCosine), 0.13);
   // At the bounds themselves, no slack is left.
   const stm::SimplexCosines shape = stm::MeasureSimplexCosines<3>(tetrahedronCorners);
   EXPECT_EQ(
