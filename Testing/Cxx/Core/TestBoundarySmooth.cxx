@@ -589,6 +589,31 @@ TYPED_TEST(BoundarySmoothTest, StaircaseSurfaceBecomesSmoother)
 /// (3D: 3 for z < s and 4 for z >= s), s = extent / 2. The points are jittered (seeded) except
 /// on the border, keeping every interface in its plane and every junction line on its line; the
 /// junction points of 2D and the quadruple point (s, s, s) of 3D are not jittered.
+/// The interface planes of the junctions mesh (JitteredJunctions) that point x lies on: x =
+/// middle, y = middle where x >= middle, and in 3D z = middle where x, y >= middle. On all D of
+/// them: the 2D triple point or the 3D quadruple point.
+struct JunctionPlanes
+{
+  bool X, Y, Z;
+  int Count() const { return (this->X ? 1 : 0) + (this->Y ? 1 : 0) + (this->Z ? 1 : 0); }
+};
+
+template <int D>
+JunctionPlanes PlanesOf(const double* x, double middle)
+{
+  return { x[0] == middle, x[1] == middle && x[0] >= middle,
+    D == 3 && x[D - 1] == middle && x[0] >= middle && x[1] >= middle };
+}
+
+/// Expects y to keep the coordinates that put point p on its planes, bit for bit.
+template <int D>
+void ExpectPlanesKept(const JunctionPlanes& on, const double* y, double middle, std::int64_t p)
+{
+  EXPECT_TRUE(!on.X || y[0] == middle) << "point " << p;
+  EXPECT_TRUE(!on.Y || y[1] == middle) << "point " << p;
+  EXPECT_TRUE(!on.Z || y[D - 1] == middle) << "point " << p;
+}
+
 template <int D>
 SmoothMesh<D> JitteredJunctions(std::int64_t extent, unsigned seed, double amplitude = 0.1)
 {
@@ -632,13 +657,11 @@ SmoothMesh<D> JitteredJunctions(std::int64_t extent, unsigned seed, double ampli
     {
       continue;
     }
-    const bool onX = x[0] == middle;
-    const bool onY = x[1] == middle && x[0] >= middle;
-    const bool onZ = D == 3 && x[D - 1] == middle && x[0] >= middle && x[1] >= middle;
-    move[0] = onX ? 0.0 : move[0];
-    move[1] = onY ? 0.0 : move[1];
-    move[D - 1] = onZ ? 0.0 : move[D - 1];
-    if (onX && (D == 2 ? x[1] == middle : x[1] == middle && x[D - 1] == middle))
+    const JunctionPlanes on = PlanesOf<D>(x, middle);
+    move[0] = on.X ? 0.0 : move[0];
+    move[1] = on.Y ? 0.0 : move[1];
+    move[D - 1] = on.Z ? 0.0 : move[D - 1];
+    if (on.X && (D == 2 ? x[1] == middle : x[1] == middle && x[D - 1] == middle))
     {
       continue; // the 2D junction point, the 3D quadruple point
     }
@@ -680,14 +703,9 @@ TYPED_TEST(BoundarySmoothTest, JunctionLinesAndPointsAreRespected)
       continue;
     }
     // The coordinates that put a point on an interface plane stay bit for bit.
-    const bool onX = before[0] == middle;
-    const bool onY = before[1] == middle && before[0] >= middle;
-    const bool onZ =
-      D == 3 && before[D - 1] == middle && before[0] >= middle && before[1] >= middle;
-    EXPECT_TRUE(!onX || after[0] == middle) << "point " << p;
-    EXPECT_TRUE(!onY || after[1] == middle) << "point " << p;
-    EXPECT_TRUE(!onZ || after[D - 1] == middle) << "point " << p;
-    const int planes = (onX ? 1 : 0) + (onY ? 1 : 0) + (onZ ? 1 : 0);
+    const JunctionPlanes on = PlanesOf<D>(before, middle);
+    ExpectPlanesKept<D>(on, after, middle, p);
+    const int planes = on.Count();
     if (planes == D)
     {
       // The 2D triple point, the 3D quadruple point.
@@ -785,13 +803,9 @@ TYPED_TEST(BoundarySmoothTest, ImprovementKeepsInterfacesJunctionsAndVolumes)
     {
       const double* x = input.Points.data() + p * D;
       const double* y = mesh.Points.data() + p * D;
-      const bool onX = x[0] == middle;
-      const bool onY = x[1] == middle && x[0] >= middle;
-      const bool onZ = D == 3 && x[D - 1] == middle && x[0] >= middle && x[1] >= middle;
-      EXPECT_TRUE(!onX || y[0] == middle) << "point " << p;
-      EXPECT_TRUE(!onY || y[1] == middle) << "point " << p;
-      EXPECT_TRUE(!onZ || y[D - 1] == middle) << "point " << p;
-      const int planes = (onX ? 1 : 0) + (onY ? 1 : 0) + (onZ ? 1 : 0);
+      const JunctionPlanes on = PlanesOf<D>(x, middle);
+      ExpectPlanesKept<D>(on, y, middle, p);
+      const int planes = on.Count();
       bool moved = false;
       for (int axis = 0; axis < D; ++axis)
       {
@@ -890,17 +904,12 @@ TYPED_TEST(BoundarySmoothTest, ImprovementMovesInterfacePointsWhereCellsStayBeyo
   {
     const double* x = input.Points.data() + p * D;
     const double* y = mesh.Points.data() + p * D;
-    const bool onX = x[0] == middle;
-    const bool onY = x[1] == middle && x[0] >= middle;
-    const bool onZ = D == 3 && x[D - 1] == middle && x[0] >= middle && x[1] >= middle;
-    const int planes = (onX ? 1 : 0) + (onY ? 1 : 0) + (onZ ? 1 : 0);
-    if (planes >= 2)
+    const JunctionPlanes on = PlanesOf<D>(x, middle);
+    if (on.Count() >= 2)
     {
       // A junction point: on its line (3D: its planes' coordinates kept) or fixed.
-      EXPECT_TRUE(!onX || y[0] == middle) << "point " << p;
-      EXPECT_TRUE(!onY || y[1] == middle) << "point " << p;
-      EXPECT_TRUE(!onZ || y[D - 1] == middle) << "point " << p;
-      EXPECT_TRUE(planes < D || std::equal(x, x + D, y)) << "junction point " << p << " moved";
+      ExpectPlanesKept<D>(on, y, middle, p);
+      EXPECT_TRUE(on.Count() < D || std::equal(x, x + D, y)) << "junction point " << p << " moved";
     }
   }
   SmoothMesh<D> pooled = input;
@@ -981,10 +990,7 @@ TYPED_TEST(BoundarySmoothTest, VolumeRestorationReachesTheTargets)
     {
       inside = inside && x[axis] > 1.0 && x[axis] < static_cast<double>(extent - 1);
     }
-    const bool onX = x[0] == middle;
-    const bool onY = x[1] == middle && x[0] >= middle;
-    const bool onZ = D == 3 && x[D - 1] == middle && x[0] >= middle && x[1] >= middle;
-    if (inside && (onX ? 1 : 0) + (onY ? 1 : 0) + (onZ ? 1 : 0) == D)
+    if (inside && PlanesOf<D>(x, middle).Count() == D)
     {
       ++junctionPoints;
       for (int axis = 0; axis < D; ++axis)
