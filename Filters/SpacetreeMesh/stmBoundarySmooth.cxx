@@ -182,6 +182,7 @@ void stmBoundarySmooth::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "PassBand: " << this->PassBand << "\n";
   os << indent << "MaxDisplacement: " << this->MaxDisplacement << "\n";
   os << indent << "NumberOfInteriorLayers: " << this->NumberOfInteriorLayers << "\n";
+  os << indent << "InteriorRelaxationInterval: " << this->InteriorRelaxationInterval << "\n";
   os << indent << "MaxConditionNumber: " << this->MaxConditionNumber << "\n";
   os << indent << "MinDihedralAngle: " << this->MinDihedralAngle << "\n";
   os << indent << "NumberOfImprovementSweeps: " << this->NumberOfImprovementSweeps << "\n";
@@ -286,6 +287,7 @@ int stmBoundarySmooth::RequestData(
   request.Options.PassBand = this->PassBand;
   request.Options.MaxDisplacement = this->MaxDisplacement;
   request.Options.NumberOfInteriorLayers = this->NumberOfInteriorLayers;
+  request.Options.InteriorRelaxationInterval = this->InteriorRelaxationInterval;
   request.Options.MaxConditionNumber = this->MaxConditionNumber;
   request.Options.MinDihedralAngle = this->MinDihedralAngle;
   request.Options.NumberOfImprovementSweeps = this->NumberOfImprovementSweeps;

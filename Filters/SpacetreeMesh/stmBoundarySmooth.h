@@ -105,11 +105,21 @@ public:
 
   ///@{
   /**
-   * Rings of interior points next to the surface smoothed after each surface iteration, in
-   * [0, 10]. Default 2.
+   * Rings of interior points next to the surface smoothed (volumetric Laplacian) after every
+   * InteriorRelaxationInterval-th surface iteration and after the last, in [0, 10]. Default 2.
    */
   vtkSetClampMacro(NumberOfInteriorLayers, int, 0, 10);
   vtkGetMacro(NumberOfInteriorLayers, int);
+  ///@}
+
+  ///@{
+  /**
+   * Surface iterations per relaxation of the interior layers: after every k-th iteration and
+   * after the last, in [1, 1000]. Default 4 (1: after every iteration, which costs more moves
+   * for the same quality).
+   */
+  vtkSetClampMacro(InteriorRelaxationInterval, int, 1, 1000);
+  vtkGetMacro(InteriorRelaxationInterval, int);
   ///@}
 
   ///@{
@@ -242,6 +252,7 @@ private:
   double PassBand = 0.1;
   double MaxDisplacement = 0.0;
   int NumberOfInteriorLayers = 2;
+  int InteriorRelaxationInterval = 4;
   double MaxConditionNumber = 3.5;
   double MinDihedralAngle = 15.0;
   int NumberOfImprovementSweeps = 10;

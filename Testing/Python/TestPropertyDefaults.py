@@ -76,7 +76,7 @@ PRINTED_DEFAULTS = {
                       "NumberOfAdjustedPoints: 0"],
     "stmBoundarySmooth": ["NumberOfIterations: 20", "Method: Taubin", "RelaxationFactor: 0.5",
                           "PassBand: 0.1", "MaxDisplacement: 0", "NumberOfInteriorLayers: 2",
-                          "MaxConditionNumber: 3.5", "MinDihedralAngle: 15",
+                          "InteriorRelaxationInterval: 4", "MaxConditionNumber: 3.5", "MinDihedralAngle: 15",
                           "NumberOfImprovementSweeps: 10", "ImprovementMovesInterfaces: On",
                           "RestoreOriginalVolumes: Off",
                           "BackgroundMaterial: 0", "ProjectToFunction: Off",

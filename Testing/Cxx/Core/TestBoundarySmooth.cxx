@@ -512,6 +512,37 @@ TYPED_TEST(BoundarySmoothTest, ThreadCountDoesNotChangeTheResult)
   }
 }
 
+// The interior layers are relaxed after every InteriorRelaxationInterval-th iteration and after
+// the last: 20 iterations make 20, 5 (4, 8, ..., 20) and 7 (3, 6, ..., 18, 20) passes at
+// intervals 1, 4 and 3, and one pass (after the last) at an interval beyond the iteration
+// count, which for a single iteration is the interval-1 result bit for bit. Fewer passes leave
+// other points; without interior layers there is no pass.
+TYPED_TEST(BoundarySmoothTest, InteriorLayersAreRelaxedEveryIntervalAndAfterTheLastIteration)
+{
+  constexpr int D = TypeParam::value;
+  const SmoothMesh<D> input = CutBall<D>(Extent<D>(), 0.35);
+  auto run = [&](int iterations, int interval, int layers, SmoothMesh<D>& mesh)
+  {
+    stm::BoundarySmoothOptions options;
+    options.NumberOfIterations = iterations;
+    options.InteriorRelaxationInterval = interval;
+    options.NumberOfInteriorLayers = layers;
+    mesh = input;
+    return Smooth<D>(mesh, options).InteriorRelaxations;
+  };
+  SmoothMesh<D> a, b;
+  EXPECT_EQ(run(20, 1, 2, a), 20);
+  EXPECT_EQ(run(20, 4, 2, b), 5);
+  EXPECT_NE(a.Points, b.Points);
+  EXPECT_EQ(run(20, 3, 2, b), 7);
+  EXPECT_EQ(run(20, 25, 2, b), 1);
+  EXPECT_EQ(run(20, 4, 0, b), 0);
+  EXPECT_EQ(run(1, 1, 2, a), 1);
+  EXPECT_EQ(run(1, 9, 2, b), 1);
+  EXPECT_EQ(a.Points, b.Points);
+  EXPECT_EQ(Check<D>(b).IsValid(), true);
+}
+
 // A perfect staircase cannot move: every move of a surface point would make some incident
 // simplex worse than the input's worst (1.15 in 2D, 1.22 in 3D), which bounds every move.
 TYPED_TEST(BoundarySmoothTest, PerfectStaircaseStays)
@@ -1027,6 +1058,9 @@ TEST(BoundarySmooth, RejectsBadOptionsAndIds)
   EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
   options = stm::BoundarySmoothOptions();
   options.MinDihedralAngle = 180.0;
+  EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
+  options = stm::BoundarySmoothOptions();
+  options.InteriorRelaxationInterval = 0;
   EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
   options = stm::BoundarySmoothOptions();
   options.NumberOfImprovementSweeps = -1;
