@@ -304,7 +304,8 @@ Arguments:
                         leaves output, the volume fraction of the hexahedra; for snap the
                         snapped points and the refused snaps; for cut the split cells, the cut
                         points and the inside and outside cells; for smooth the moved points,
-                        the rejected moves and the quality improvement moves), the
+                        the rejected moves, the quality improvement moves and the split
+                        interior edges), the
                         spacetree's cell size per level (in voxels) and the per-material counts
                         as JSON.
   --compressor C        compression of .vtu and .vtp files: lz4 (the default, fastest), zlib
@@ -1948,6 +1949,7 @@ struct StageReport
   long long MovedPoints = -1;
   long long RejectedMoves = -1;
   long long ImprovedPoints = -1;
+  long long SplitEdges = -1;
   long long SurfaceCells = -1;
 };
 
@@ -3112,6 +3114,10 @@ void PrintTable(const std::vector<StageReport>& stages, double totalSeconds)
     {
       std::cout << ", " << stage.ImprovedPoints << " quality improvement moves";
     }
+    if (stage.SplitEdges > 0)
+    {
+      std::cout << ", " << stage.SplitEdges << " split edges";
+    }
     if (stage.SurfaceCells >= 0)
     {
       std::cout << "; a surface of " << stage.SurfaceCells << ' '
@@ -3487,7 +3493,8 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
     {
       json << ", \"moved_points\": " << JsonCount(stage.MovedPoints)
            << ", \"rejected_moves\": " << JsonCount(stage.RejectedMoves)
-           << ", \"improved_points\": " << JsonCount(stage.ImprovedPoints);
+           << ", \"improved_points\": " << JsonCount(stage.ImprovedPoints)
+           << ", \"split_edges\": " << JsonCount(stage.SplitEdges);
       if (stage.SurfaceCells >= 0)
       {
         json << ", \"surface_cells\": " << stage.SurfaceCells;
@@ -3906,6 +3913,7 @@ vtkSmartPointer<vtkPointSet> RunSmooth(vtkSmartPointer<vtkUnstructuredGrid> grid
   report.MovedPoints = static_cast<long long>(smooth->GetNumberOfMovedPoints());
   report.RejectedMoves = static_cast<long long>(smooth->GetNumberOfRejectedMoves());
   report.ImprovedPoints = static_cast<long long>(smooth->GetNumberOfImprovedPoints());
+  report.SplitEdges = static_cast<long long>(smooth->GetNumberOfSplitEdges());
   if (!options.WritesSurface() && options.KeepSide == stmMarchingSimplices::BOTH)
   {
     return grid;

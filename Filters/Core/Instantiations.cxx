@@ -10,6 +10,7 @@
 #include "Cut/SeparatingFunction.h"
 #include "Cut/VertexSnap.h"
 #include "Smooth/BoundarySmooth.h"
+#include "Smooth/InteriorEdgeSplit.h"
 #include "Spacetree/SpacetreeBuild.h"
 #include "Spacetree/ThinParts.h"
 #include "Surface/InterfaceFacets.h"
@@ -76,6 +77,11 @@ void InstantiatePipeline()
   BoundarySmoother<Dim>().Smooth(static_cast<double*>(nullptr), 0,
     static_cast<const std::int64_t*>(nullptr), 0, static_cast<const std::int64_t*>(nullptr),
     BoundarySmoothOptions(), executor);
+  if constexpr (Dim >= 2)
+  {
+    InteriorEdgeSplit<Dim>().Split(static_cast<const double*>(nullptr), 0,
+      static_cast<const std::int32_t*>(nullptr), 0, nullptr, InteriorEdgeSplitOptions(), executor);
+  }
   InterfaceFacets<Dim> interfaces;
   ExtractInterfaceFacets<Dim>(static_cast<const double*>(nullptr), 0,
     static_cast<const std::int64_t*>(nullptr), 0, static_cast<const std::int64_t*>(nullptr),

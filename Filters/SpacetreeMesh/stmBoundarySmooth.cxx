@@ -7,6 +7,7 @@
 
 #include "Cut/LevelSetProjection.h"
 #include "Smooth/BoundarySmooth.h"
+#include "Smooth/InteriorEdgeSplit.h"
 
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
@@ -24,6 +25,7 @@
 #include "vtkPointData.h"
 #include "vtkPoints.h"
 #include "vtkSMPTools.h"
+#include "vtkSmartPointer.h"
 #include "vtkTypeInt32Array.h"
 #include "vtkTypeInt64Array.h"
 #include "vtkUnsignedCharArray.h"
@@ -49,7 +51,172 @@ struct SmoothRequest
   vtkImplicitFunction* Function; // null: no projection
   stmPlaneFrame Coordinates;
   stm::BoundarySmoothStats Stats;
+  vtkIdType SplitEdges = 0;
 };
+
+/// The cells with the edits of InteriorEdgeSplit, stored as Storage (32- or 64-bit ids).
+template <class Storage, int Dim, class IdType>
+vtkSmartPointer<vtkCellArray> SplitCellArray(
+  const IdType* connectivity, vtkIdType cells, const stm::InteriorEdgeSplit<Dim>& split)
+{
+  using Value = typename Storage::ValueType;
+  const auto& appended = split.GetAppendedCells();
+  const vtkIdType total = cells + static_cast<vtkIdType>(appended.size());
+  vtkNew<Storage> offsets, ids;
+  offsets->SetNumberOfValues(total + 1);
+  ids->SetNumberOfValues(total * (Dim + 1));
+  Value* offsetValues = offsets->GetPointer(0);
+  Value* idValues = ids->GetPointer(0);
+  vtkSMPTools::For(0, total + 1,
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      for (vtkIdType c = begin; c < end; ++c)
+      {
+        offsetValues[c] = static_cast<Value>(c * (Dim + 1));
+        for (int k = 0; k <= Dim && c < cells; ++k)
+        {
+          idValues[c * (Dim + 1) + k] = static_cast<Value>(connectivity[c * (Dim + 1) + k]);
+        }
+      }
+    });
+  for (const auto& changed : split.GetChangedCells())
+  {
+    for (int k = 0; k <= Dim; ++k)
+    {
+      idValues[changed.first * (Dim + 1) + k] = static_cast<Value>(changed.second[k]);
+    }
+  }
+  for (std::size_t c = 0; c < appended.size(); ++c)
+  {
+    for (int k = 0; k <= Dim; ++k)
+    {
+      idValues[(cells + static_cast<vtkIdType>(c)) * (Dim + 1) + k] =
+        static_cast<Value>(appended[c][k]);
+    }
+  }
+  vtkNew<vtkCellArray> cellArray;
+  cellArray->SetData(offsets, ids);
+  return cellArray;
+}
+
+/// The output with the edits of InteriorEdgeSplit: new points appended (point data at the
+/// edge's midpoint, zero displacement), cells changed in place and appended (cell data of the
+/// cell each was split from).
+template <int Dim, class IdType>
+stm::Status SplitEdges(SmoothRequest& request, const IdType* connectivity,
+  const std::vector<double>& local, const std::vector<std::int64_t>& materials,
+  stmSMPExecutor& executor)
+{
+  vtkUnstructuredGrid* output = request.Output;
+  const vtkIdType points = output->GetNumberOfPoints();
+  const vtkIdType cells = output->GetNumberOfCells();
+  stm::InteriorEdgeSplitOptions options;
+  options.MaxConditionNumber = request.Options.MaxConditionNumber;
+  options.MinDihedralAngle = request.Options.MinDihedralAngle;
+  stm::InteriorEdgeSplit<Dim> split;
+  const stm::Status status = split.Split(local.data(), points, connectivity, cells,
+    materials.empty() ? nullptr : materials.data(), options, executor);
+  if (!status.IsOk() || split.GetNewPoints().empty())
+  {
+    return status;
+  }
+  request.SplitEdges = static_cast<vtkIdType>(split.GetNewPoints().size());
+
+  // Bulk copies of the arrays (a copy per tuple through vtkPointData costs seconds on millions
+  // of points), then the few new tuples.
+  vtkPoints* smoothed = output->GetPoints();
+  const vtkIdType added = request.SplitEdges;
+  vtkNew<vtkPoints> allPoints;
+  allPoints->SetDataType(smoothed->GetDataType());
+  allPoints->DeepCopy(smoothed);
+  allPoints->Resize(points + added);
+  vtkPointData* smoothedPD = output->GetPointData();
+  vtkNew<vtkPointData> pointData;
+  vtkNew<vtkIdList> ends;
+  ends->SetNumberOfIds(2);
+  double halves[2] = { 0.5, 0.5 };
+  for (int a = 0; a < smoothedPD->GetNumberOfArrays(); ++a)
+  {
+    vtkAbstractArray* source = smoothedPD->GetAbstractArray(a);
+    vtkSmartPointer<vtkAbstractArray> copy = vtk::TakeSmartPointer(source->NewInstance());
+    copy->DeepCopy(source);
+    copy->Resize(points + added);
+    copy->SetNumberOfTuples(points + added);
+    for (vtkIdType n = 0; n < added; ++n)
+    {
+      const auto& point = split.GetNewPoints()[static_cast<std::size_t>(n)];
+      ends->SetId(0, point.A);
+      ends->SetId(1, point.B);
+      copy->InterpolateTuple(points + n, ends, source, halves);
+    }
+    pointData->AddArray(copy);
+  }
+  for (int attribute = 0; attribute < vtkDataSetAttributes::NUM_ATTRIBUTES; ++attribute)
+  {
+    if (vtkAbstractArray* active = smoothedPD->GetAbstractAttribute(attribute))
+    {
+      pointData->SetActiveAttribute(active->GetName(), attribute);
+    }
+  }
+  for (vtkIdType n = 0; n < added; ++n)
+  {
+    const auto& point = split.GetNewPoints()[static_cast<std::size_t>(n)];
+    double a[3], b[3], base[3], x[3];
+    smoothed->GetPoint(point.A, a);
+    smoothed->GetPoint(point.B, b);
+    for (int c = 0; c < 3; ++c)
+    {
+      base[c] = 0.5 * (a[c] + b[c]);
+    }
+    request.Coordinates.Lift<Dim>(point.Position.data(), base, x);
+    allPoints->InsertPoint(points + n, x);
+  }
+  if (vtkDataArray* displacement = pointData->GetArray("SmoothingDisplacement"))
+  {
+    for (vtkIdType n = 0; n < added; ++n)
+    {
+      displacement->SetTuple3(points + n, 0.0, 0.0, 0.0);
+    }
+  }
+
+  const auto& appended = split.GetAppendedCells();
+  const vtkIdType total = cells + static_cast<vtkIdType>(appended.size());
+  const bool fits32 = points + added < VTK_TYPE_INT32_MAX && total * (Dim + 1) < VTK_TYPE_INT32_MAX;
+  vtkSmartPointer<vtkCellArray> cellArray = fits32
+    ? SplitCellArray<vtkTypeInt32Array, Dim>(connectivity, cells, split)
+    : SplitCellArray<vtkTypeInt64Array, Dim>(connectivity, cells, split);
+  vtkCellData* smoothedCD = output->GetCellData();
+  vtkNew<vtkCellData> cellData;
+  for (int a = 0; a < smoothedCD->GetNumberOfArrays(); ++a)
+  {
+    vtkAbstractArray* source = smoothedCD->GetAbstractArray(a);
+    vtkSmartPointer<vtkAbstractArray> copy = vtk::TakeSmartPointer(source->NewInstance());
+    copy->DeepCopy(source);
+    copy->Resize(total);
+    copy->SetNumberOfTuples(total);
+    for (vtkIdType c = cells; c < total; ++c)
+    {
+      copy->SetTuple(c, split.GetAppendedParents()[static_cast<std::size_t>(c - cells)], source);
+    }
+    cellData->AddArray(copy);
+  }
+  for (int attribute = 0; attribute < vtkDataSetAttributes::NUM_ATTRIBUTES; ++attribute)
+  {
+    if (vtkAbstractArray* active = smoothedCD->GetAbstractAttribute(attribute))
+    {
+      cellData->SetActiveAttribute(active->GetName(), attribute);
+    }
+  }
+
+  vtkNew<vtkUnstructuredGrid> result;
+  result->SetPoints(allPoints);
+  result->SetCells(Dim == 3 ? VTK_TETRA : VTK_TRIANGLE, cellArray);
+  result->GetPointData()->ShallowCopy(pointData);
+  result->GetCellData()->ShallowCopy(cellData);
+  result->GetFieldData()->ShallowCopy(output->GetFieldData());
+  output->ShallowCopy(result);
+  return stm::Status::Ok();
+}
 
 template <int Dim, class IdType>
 stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
@@ -162,7 +329,11 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
     });
   output->SetPoints(moved);
   output->GetPointData()->AddArray(displacement);
-  return stm::Status::Ok();
+  if (!request.Filter->GetSplitInteriorEdges() || request.Filter->GetAbortExecute())
+  {
+    return stm::Status::Ok();
+  }
+  return SplitEdges<Dim>(request, connectivity, local, materials, executor);
 }
 } // namespace
 
@@ -188,6 +359,7 @@ void stmBoundarySmooth::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfImprovementSweeps: " << this->NumberOfImprovementSweeps << "\n";
   os << indent
      << "ImprovementMovesInterfaces: " << (this->ImprovementMovesInterfaces ? "On" : "Off") << "\n";
+  os << indent << "SplitInteriorEdges: " << (this->SplitInteriorEdges ? "On" : "Off") << "\n";
   os << indent << "RestoreOriginalVolumes: " << (this->RestoreOriginalVolumes ? "On" : "Off")
      << "\n";
   os << indent << "BackgroundMaterial: " << this->BackgroundMaterial << "\n";
@@ -201,6 +373,7 @@ void stmBoundarySmooth::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfMovedPoints: " << this->NumberOfMovedPoints << "\n";
   os << indent << "NumberOfRejectedMoves: " << this->NumberOfRejectedMoves << "\n";
   os << indent << "NumberOfImprovedPoints: " << this->NumberOfImprovedPoints << "\n";
+  os << indent << "NumberOfSplitEdges: " << this->NumberOfSplitEdges << "\n";
   os << indent << "LargestVolumeErrorBefore: " << this->LargestVolumeErrorBefore << "\n";
   os << indent << "LargestVolumeErrorAfter: " << this->LargestVolumeErrorAfter << "\n";
 }
@@ -223,6 +396,7 @@ int stmBoundarySmooth::RequestData(
   this->NumberOfMovedPoints = 0;
   this->NumberOfRejectedMoves = 0;
   this->NumberOfImprovedPoints = 0;
+  this->NumberOfSplitEdges = 0;
   this->LargestVolumeErrorBefore = 0.0;
   this->LargestVolumeErrorAfter = 0.0;
   output->Initialize();
@@ -326,6 +500,7 @@ int stmBoundarySmooth::RequestData(
   this->NumberOfMovedPoints = static_cast<vtkIdType>(request.Stats.MovedPoints);
   this->NumberOfRejectedMoves = static_cast<vtkIdType>(request.Stats.RejectedMoves);
   this->NumberOfImprovedPoints = static_cast<vtkIdType>(request.Stats.ImprovedPoints);
+  this->NumberOfSplitEdges = request.SplitEdges;
   this->LargestVolumeErrorBefore = request.Stats.LargestVolumeErrorBefore;
   this->LargestVolumeErrorAfter = request.Stats.LargestVolumeErrorAfter;
   this->UpdateProgress(1.0);

@@ -12,8 +12,9 @@
  * does). Points on the outer boundary of BackgroundMaterial cells (the box of background around
  * the body) stay fixed. Where three or more materials meet, a point on a junction line (3D)
  * moves only along the line, and a point where lines meet (a quadruple point) or a 2D triple
- * point stays. After each surface iteration, NumberOfInteriorLayers rings of interior
- * points next to the surface get one volumetric Laplacian pass. Every move is validated: it
+ * point stays. After every InteriorRelaxationInterval-th surface iteration and after the last,
+ * NumberOfInteriorLayers rings of interior points next to the surface get one volumetric
+ * Laplacian pass. Every move is validated: it
  * must keep every incident cell's orientation and keep the worst condition number and the
  * smallest dihedral angle around the point within MaxConditionNumber / MinDihedralAngle (or no
  * worse than before, where they already were); else it is tried at half and a quarter of its
@@ -25,14 +26,17 @@
  * points of the cells still beyond the quality bounds to improve them, in the directions that
  * keep every material's volume (along interfaces and junction lines), then, where cells are
  * still beyond them (ImprovementMovesInterfaces), moving interface points off their interface.
+ * Cells still beyond the bounds after that have an edge inside one material split where that
+ * makes them less bad (SplitInteriorEdges; see Filters/Core/Smooth/InteriorEdgeSplit.h).
  *
  * Input: a vtkUnstructuredGrid of only tetrahedra (3D) or only triangles in a plane (2D), e.g.
  * the output of stmMarchingSimplices, with the cell array "Material" (without it, every cell is
  * one material that is not the background). Output: the same cells and arrays with the points
  * moved (same precision as the input points) and the point array "SmoothingDisplacement" (3
- * components). Point arrays such as "SeparatingFunction" are passed unchanged, not
- * re-evaluated. The result does not depend on the number of threads (see
- * Filters/Core/Smooth/BoundarySmooth.h for the method and its decisions).
+ * components); with split edges, the new points and cells appended (NumberOfSplitEdges). Point
+ * arrays such as "SeparatingFunction" are passed unchanged, not re-evaluated. The result does not
+ * depend on the number of threads (see Filters/Core/Smooth/BoundarySmooth.h for the method and its
+ * decisions).
  *
  * @sa stmMarchingSimplices stmSeparatingFunction
  */
@@ -170,6 +174,22 @@ public:
 
   ///@{
   /**
+   * Whether cells still beyond the quality bounds after the smoothing and the improvement have
+   * an edge inside one material split (every cell around it of that material, the edge on no
+   * interface and not on the outer boundary): a new point, which no interface holds, goes where
+   * the new cells are least bad, when they are less bad than the cells they replace. Each cell
+   * around the edge becomes two (the first keeps its id and cell data, the second is appended
+   * with a copy of them); the new points are appended with point data interpolated at the
+   * edge's midpoint and a zero SmoothingDisplacement. Volumes and interfaces do not change.
+   * 2D and 3D meshes. Default on.
+   */
+  vtkSetMacro(SplitInteriorEdges, bool);
+  vtkGetMacro(SplitInteriorEdges, bool);
+  vtkBooleanMacro(SplitInteriorEdges, bool);
+  ///@}
+
+  ///@{
+  /**
    * Whether, after the iterations, the interfaces move along their normals so that every
    * material gets back its original volume: the field array "OriginalMaterialVolumes" (pairs
    * of material and volume, which stmMultiMaterialCut writes: each material's volume before
@@ -223,6 +243,12 @@ public:
   vtkGetMacro(NumberOfImprovedPoints, vtkIdType);
 
   /**
+   * Result of the last update with SplitInteriorEdges: the edges split (each added one point and
+   * as many cells as were around it).
+   */
+  vtkGetMacro(NumberOfSplitEdges, vtkIdType);
+
+  /**
    * Results of the last update with RestoreOriginalVolumes: the largest relative difference of
    * a material's volume from the volume of its original cells, before and after the
    * restoration (0 without it).
@@ -257,6 +283,7 @@ private:
   double MinDihedralAngle = 15.0;
   int NumberOfImprovementSweeps = 10;
   bool ImprovementMovesInterfaces = true;
+  bool SplitInteriorEdges = true;
   bool RestoreOriginalVolumes = false;
   int BackgroundMaterial = 0;
   bool ProjectToFunction = false;
@@ -264,6 +291,7 @@ private:
   vtkIdType NumberOfMovedPoints = 0;
   vtkIdType NumberOfRejectedMoves = 0;
   vtkIdType NumberOfImprovedPoints = 0;
+  vtkIdType NumberOfSplitEdges = 0;
   double LargestVolumeErrorBefore = 0.0;
   double LargestVolumeErrorAfter = 0.0;
 };

@@ -15,9 +15,12 @@
 #include "stmVertexSnap.h"
 
 #include "vtkCellData.h"
+#include "vtkCellType.h"
 #include "vtkDataArray.h"
+#include "vtkDoubleArray.h"
 #include "vtkImageData.h"
 #include "vtkImageThreshold.h"
+#include "vtkIntArray.h"
 #include "vtkMath.h"
 #include "vtkNIFTIImageReader.h"
 #include "vtkNew.h"
@@ -125,7 +128,8 @@ TEST(BoundarySmoothFilter, AnalyticBallTaubinKeepsTheVolumeLaplacianShrinksIt)
   EXPECT_LT(changes[stmBoundarySmooth::LAPLACIAN], -0.01);
 }
 
-// Projection onto the sphere: every moved surface point lies on it; MaxDisplacement holds.
+// Projection onto the sphere: every moved surface point lies on it (the points of split interior
+// edges, appended after the input's, lie inside); MaxDisplacement holds.
 TEST(BoundarySmoothFilter, ProjectionAndMaxDisplacement)
 {
   BallPipeline ball(16, 0.35);
@@ -139,7 +143,8 @@ TEST(BoundarySmoothFilter, ProjectionAndMaxDisplacement)
   vtkUnstructuredGrid* mesh = smooth->GetOutput();
   EXPECT_TRUE(stmTest::CheckMesh<3>(mesh, Axes3, 1e-12).IsValid());
   vtkIdType moved = 0;
-  for (vtkIdType p = 0; p < mesh->GetNumberOfPoints(); ++p)
+  ASSERT_GE(mesh->GetNumberOfPoints(), input->GetNumberOfPoints());
+  for (vtkIdType p = 0; p < input->GetNumberOfPoints(); ++p)
   {
     double x[3], y[3];
     input->GetPoint(p, x);
@@ -200,6 +205,82 @@ TEST(BoundarySmoothFilter, TwoDimensionalDisk)
   EXPECT_GT(smooth->GetNumberOfMovedPoints(), 20);
   EXPECT_LE(stmTest::MeasureVerdictQuality(smooth->GetOutput()).WorstCondition,
     stmTest::MeasureVerdictQuality(input).WorstCondition * (1 + 1e-9));
+}
+
+// SplitInteriorEdges through the filter: six needle tetrahedra of Material 4 around the edge
+// from (0, 0, -1) to (0, 0, 1) and a hexagon of radius 0.35 (condition number 2.57, bound set to
+// 2, no smoothing or improvement). The edge is split at its midpoint: one point appended with
+// its point data interpolated (a "Tag" of 10 and 20 at the ends gives 15) and a zero
+// SmoothingDisplacement, six cells appended with their parents' cell data, a valid mesh with
+// the same volume and a worst condition number of 1.86. With the option off nothing changes.
+TEST(BoundarySmoothFilter, SplitInteriorEdgesOfNeedles)
+{
+  vtkNew<vtkUnstructuredGrid> star;
+  vtkNew<vtkPoints> points;
+  points->InsertNextPoint(0.0, 0.0, -1.0);
+  points->InsertNextPoint(0.0, 0.0, 1.0);
+  vtkNew<vtkDoubleArray> tag;
+  tag->SetName("Tag");
+  tag->InsertNextValue(10.0);
+  tag->InsertNextValue(20.0);
+  for (int k = 0; k < 6; ++k)
+  {
+    const double angle = k * vtkMath::Pi() / 3.0;
+    points->InsertNextPoint(0.35 * std::cos(angle), 0.35 * std::sin(angle), 0.0);
+    tag->InsertNextValue(0.0);
+  }
+  star->SetPoints(points);
+  star->GetPointData()->AddArray(tag);
+  vtkNew<vtkIntArray> material;
+  material->SetName("Material");
+  for (int k = 0; k < 6; ++k)
+  {
+    // Corners ordered for VTK's (positive) orientation: the hexagon runs counter-clockwise.
+    const vtkIdType ids[4] = { 0, 1, 2 + k, 2 + (k + 1) % 6 };
+    star->InsertNextCell(VTK_TETRA, 4, ids);
+    material->InsertNextValue(4);
+  }
+  star->GetCellData()->AddArray(material);
+  const stm::MeshInvariantReport before = stmTest::CheckMesh<3>(star, Axes3, 1e-9);
+  ASSERT_TRUE(before.IsValid()) << before.Summary();
+
+  vtkNew<stmBoundarySmooth> smooth;
+  smooth->SetInputData(star);
+  smooth->SetNumberOfIterations(0);
+  smooth->SetNumberOfImprovementSweeps(0);
+  smooth->SetMaxConditionNumber(2.0);
+  smooth->Update();
+  vtkUnstructuredGrid* output = smooth->GetOutput();
+  EXPECT_EQ(smooth->GetNumberOfSplitEdges(), 1);
+  ASSERT_EQ(output->GetNumberOfPoints(), 9);
+  ASSERT_EQ(output->GetNumberOfCells(), 12);
+  double x[3];
+  output->GetPoint(8, x);
+  EXPECT_EQ(x[0], 0.0);
+  EXPECT_EQ(x[1], 0.0);
+  EXPECT_EQ(x[2], 0.0);
+  EXPECT_EQ(output->GetPointData()->GetArray("Tag")->GetTuple1(8), 15.0);
+  vtkDataArray* displacement = output->GetPointData()->GetArray("SmoothingDisplacement");
+  ASSERT_NE(displacement, nullptr);
+  EXPECT_EQ(vtkMath::Norm(displacement->GetTuple3(8)), 0.0);
+  vtkDataArray* materials = output->GetCellData()->GetArray("Material");
+  ASSERT_NE(materials, nullptr);
+  for (vtkIdType c = 0; c < 12; ++c)
+  {
+    EXPECT_EQ(materials->GetTuple1(c), 4.0);
+  }
+  const stm::MeshInvariantReport after = stmTest::CheckMesh<3>(output, Axes3, 1e-9);
+  EXPECT_TRUE(after.IsValid()) << after.Summary();
+  EXPECT_NEAR(after.TotalVolume, before.TotalVolume, 1e-14);
+  EXPECT_EQ(after.BoundaryFacets, before.BoundaryFacets);
+  EXPECT_NEAR(stmTest::MeasureVerdictQuality(star).WorstCondition, 2.57477, 1e-5);
+  EXPECT_NEAR(stmTest::MeasureVerdictQuality(output).WorstCondition, 1.86476, 1e-5);
+
+  smooth->SplitInteriorEdgesOff();
+  smooth->Update();
+  EXPECT_EQ(smooth->GetNumberOfSplitEdges(), 0);
+  EXPECT_EQ(smooth->GetOutput()->GetNumberOfPoints(), 8);
+  EXPECT_EQ(smooth->GetOutput()->GetNumberOfCells(), 6);
 }
 
 // The AAL brain mask through the default pipeline (labels function, quality-driven snapping,
