@@ -283,6 +283,42 @@ TEST(BoundarySmoothFilter, SplitInteriorEdgesOfNeedles)
   EXPECT_EQ(smooth->GetOutput()->GetNumberOfCells(), 6);
 }
 
+// The same in 2D, in the plane z = 2.5: the edge from (-1, 0) to (1, 0) between triangles to
+// (0, 0.3) and (0, -0.3) (condition number 2.97, bound 2) is split at (0, 0, 2.5).
+TEST(BoundarySmoothFilter, SplitInteriorEdgesInAPlane)
+{
+  vtkNew<vtkUnstructuredGrid> pair;
+  vtkNew<vtkPoints> points;
+  points->InsertNextPoint(-1.0, 0.0, 2.5);
+  points->InsertNextPoint(1.0, 0.0, 2.5);
+  points->InsertNextPoint(0.0, 0.3, 2.5);
+  points->InsertNextPoint(0.0, -0.3, 2.5);
+  pair->SetPoints(points);
+  const vtkIdType upper[3] = { 0, 1, 2 }, lower[3] = { 1, 0, 3 };
+  pair->InsertNextCell(VTK_TRIANGLE, 3, upper);
+  pair->InsertNextCell(VTK_TRIANGLE, 3, lower);
+  vtkNew<stmBoundarySmooth> smooth;
+  smooth->SetInputData(pair);
+  smooth->SetNumberOfIterations(0);
+  smooth->SetNumberOfImprovementSweeps(0);
+  smooth->SetMaxConditionNumber(2.0);
+  smooth->Update();
+  vtkUnstructuredGrid* output = smooth->GetOutput();
+  EXPECT_EQ(smooth->GetNumberOfSplitEdges(), 1);
+  ASSERT_EQ(output->GetNumberOfPoints(), 5);
+  ASSERT_EQ(output->GetNumberOfCells(), 4);
+  double x[3];
+  output->GetPoint(4, x);
+  EXPECT_EQ(x[0], 0.0);
+  EXPECT_EQ(x[1], 0.0);
+  EXPECT_EQ(x[2], 2.5);
+  const stm::MeshInvariantReport before = stmTest::CheckMesh<2>(pair, Axes2, 1e-9);
+  const stm::MeshInvariantReport after = stmTest::CheckMesh<2>(output, Axes2, 1e-9);
+  EXPECT_TRUE(after.IsValid()) << after.Summary();
+  EXPECT_NEAR(after.TotalVolume, before.TotalVolume, 1e-14);
+  EXPECT_NEAR(stmTest::MeasureVerdictQuality(output).WorstCondition, 2.09771, 1e-5);
+}
+
 // The AAL brain mask through the default pipeline (labels function, quality-driven snapping,
 // cut, 20 Taubin iterations), the acceptance check: a valid mesh, no inverted cell, the
 // worst condition number at most 3.5 and the smallest dihedral angle at least 15 degrees (the
