@@ -31,6 +31,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -207,6 +208,28 @@ TEST(BoundarySmoothFilter, TwoDimensionalDisk)
     stmTest::MeasureVerdictQuality(input).WorstCondition * (1 + 1e-9));
 }
 
+/// Runs only the interior edge splits on `mesh` (no smoothing, no improvement, condition bound
+/// 2), expects one split edge and the given sizes, and returns the new (last) point.
+std::array<double, 3> SplitOnly(
+  vtkUnstructuredGrid* mesh, stmBoundarySmooth* smooth, vtkIdType points, vtkIdType cells)
+{
+  smooth->SetInputData(mesh);
+  smooth->SetNumberOfIterations(0);
+  smooth->SetNumberOfImprovementSweeps(0);
+  smooth->SetMaxConditionNumber(2.0);
+  smooth->Update();
+  vtkUnstructuredGrid* output = smooth->GetOutput();
+  EXPECT_EQ(smooth->GetNumberOfSplitEdges(), 1);
+  EXPECT_EQ(output->GetNumberOfPoints(), points);
+  EXPECT_EQ(output->GetNumberOfCells(), cells);
+  std::array<double, 3> x{};
+  if (output->GetNumberOfPoints() == points)
+  {
+    output->GetPoint(points - 1, x.data());
+  }
+  return x;
+}
+
 // SplitInteriorEdges through the filter: six needle tetrahedra of Material 4 around the edge
 // from (0, 0, -1) to (0, 0, 1) and a hexagon of radius 0.35 (condition number 2.57, bound set to
 // 2, no smoothing or improvement). The edge is split at its midpoint: one point appended with
@@ -245,20 +268,10 @@ TEST(BoundarySmoothFilter, SplitInteriorEdgesOfNeedles)
   ASSERT_TRUE(before.IsValid()) << before.Summary();
 
   vtkNew<stmBoundarySmooth> smooth;
-  smooth->SetInputData(star);
-  smooth->SetNumberOfIterations(0);
-  smooth->SetNumberOfImprovementSweeps(0);
-  smooth->SetMaxConditionNumber(2.0);
-  smooth->Update();
+  const std::array<double, 3> added = SplitOnly(star, smooth, 9, 12);
+  EXPECT_EQ(added, (std::array<double, 3>{ 0.0, 0.0, 0.0 }));
   vtkUnstructuredGrid* output = smooth->GetOutput();
-  EXPECT_EQ(smooth->GetNumberOfSplitEdges(), 1);
   ASSERT_EQ(output->GetNumberOfPoints(), 9);
-  ASSERT_EQ(output->GetNumberOfCells(), 12);
-  double x[3];
-  output->GetPoint(8, x);
-  EXPECT_EQ(x[0], 0.0);
-  EXPECT_EQ(x[1], 0.0);
-  EXPECT_EQ(x[2], 0.0);
   EXPECT_EQ(output->GetPointData()->GetArray("Tag")->GetTuple1(8), 15.0);
   vtkDataArray* displacement = output->GetPointData()->GetArray("SmoothingDisplacement");
   ASSERT_NE(displacement, nullptr);
@@ -298,20 +311,9 @@ TEST(BoundarySmoothFilter, SplitInteriorEdgesInAPlane)
   pair->InsertNextCell(VTK_TRIANGLE, 3, upper);
   pair->InsertNextCell(VTK_TRIANGLE, 3, lower);
   vtkNew<stmBoundarySmooth> smooth;
-  smooth->SetInputData(pair);
-  smooth->SetNumberOfIterations(0);
-  smooth->SetNumberOfImprovementSweeps(0);
-  smooth->SetMaxConditionNumber(2.0);
-  smooth->Update();
+  const std::array<double, 3> added = SplitOnly(pair, smooth, 5, 4);
+  EXPECT_EQ(added, (std::array<double, 3>{ 0.0, 0.0, 2.5 }));
   vtkUnstructuredGrid* output = smooth->GetOutput();
-  EXPECT_EQ(smooth->GetNumberOfSplitEdges(), 1);
-  ASSERT_EQ(output->GetNumberOfPoints(), 5);
-  ASSERT_EQ(output->GetNumberOfCells(), 4);
-  double x[3];
-  output->GetPoint(4, x);
-  EXPECT_EQ(x[0], 0.0);
-  EXPECT_EQ(x[1], 0.0);
-  EXPECT_EQ(x[2], 2.5);
   const stm::MeshInvariantReport before = stmTest::CheckMesh<2>(pair, Axes2, 1e-9);
   const stm::MeshInvariantReport after = stmTest::CheckMesh<2>(output, Axes2, 1e-9);
   EXPECT_TRUE(after.IsValid()) << after.Summary();
