@@ -24,8 +24,9 @@
 // g_k changes sign between them, which happens where the step's interface meets an earlier one
 // (a triple line); its pieces keep its material. Step k visits only the cells whose points carry
 // m_k (a negative point carries it, and so does every cell around it), so the total work follows
-// the cells near the interfaces. Everything is deterministic: the steps are sequential and each
-// cut numbers its points in sorted edge order.
+// the cells near the interfaces. Everything is deterministic: the steps are applied one after the
+// other and each cut numbers its points in sorted edge order. Consecutive steps whose points are
+// disjoint (the two hemispheres' copies of an atlas region) are computed side by side first.
 //
 // A remaining cell whose points all have g_k = 0 (a tie, e.g. inside a flat one-voxel-thick
 // layer, whose voxel corners are all ties) goes to m_k when its input cell was m_k, or was a
@@ -43,6 +44,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -365,6 +367,9 @@ struct MultiMaterialCutOptions
   /// still unassigned move, so earlier interfaces keep their place.
   bool SnapVertices = false;
   VertexSnapOptions Snap = QualityDrivenSnap();
+  /// Compute consecutive steps whose points are disjoint side by side (Run): the same result
+  /// as one step at a time, which false gives (for comparison).
+  bool StepsSideBySide = true;
 
   static VertexSnapOptions QualityDrivenSnap()
   {
@@ -411,7 +416,8 @@ struct MultiMaterialCutCounts
   std::int64_t SplitCells = 0;         // cells split, over all steps
   std::int64_t SplitAssignedCells = 0; // of those, cells already assigned (triple lines)
   std::int64_t AddedPoints = 0;
-  std::int64_t SnappedPoints = 0; // snaps, summed over the steps
+  std::int64_t SnappedPoints = 0;   // snaps, summed over the steps
+  std::int64_t SideBySideSteps = 0; // steps computed beside others of their batch (Run)
 };
 
 /// Cuts a simplicial mesh (Dim + 1 point ids per cell) into the regions of K materials.
@@ -518,15 +524,40 @@ private:
     }
   }
 
-  /// Snaps the step's points (local numbering) in place; movable: free points carrying the
-  /// step's material. Updates the places and fractions of the moved points.
-  template <class Executor>
-  Status SnapStep(std::int32_t step, const std::vector<std::int64_t>& cells,
-    const std::vector<std::int64_t>& points, const std::vector<std::int64_t>& local,
-    std::vector<double>& values, Executor& executor);
+  /// What one step computes before it changes anything shared (see Run): its cells and their
+  /// points in a local numbering, the snapped points and the cut, in local ids.
+  struct StepWork
+  {
+    std::int32_t Step = 0;
+    std::vector<std::int64_t> Cells;       // the visited cells, ascending
+    std::vector<std::int64_t> Points;      // local id -> point id, in order of first use
+    std::vector<std::int64_t> Local;       // Cells in local ids
+    std::vector<std::uint8_t> Moved;       // per local point: snapped (empty without snapping)
+    std::vector<std::int64_t> MovedPoints; // local ids, ascending
+    std::vector<double> MovedPlaces;       // Dim per moved point
+    MaterialFractions MovedFractions;      // a row per moved point
+    std::int64_t Snapped = 0;
+    std::vector<CutEdge> CutEdges; // ends in local ids
+    std::vector<std::int64_t> PieceIds, Parents;
+    std::vector<std::uint8_t> Sides;
+    Status Result;
+  };
 
+  /// The steps from `first` on, in order, that may run side by side (Run's comment).
+  std::vector<std::int32_t> Batch(std::int32_t first);
+
+  /// Computes a step from the shared state, which it only reads (LocalIds aside: scratch of its
+  /// own points).
   template <class Executor>
-  Status Step(std::int32_t step, Executor& executor);
+  Status ComputeStep(StepWork& work, Executor& executor);
+
+  /// Snaps the step's points (local numbering) in `work`; movable: free points carrying the
+  /// step's material. Gives the moved points' places and fractions.
+  template <class Executor>
+  Status SnapStep(StepWork& work, std::vector<double>& values, Executor& executor);
+
+  /// Applies a computed step to the shared state: moved points, added points and pieces.
+  void CommitStep(StepWork& work);
 
   std::int64_t NumberOfInputPoints = 0;
   std::int32_t NumberOfMaterials = 0;
@@ -543,7 +574,9 @@ private:
   bool SnapVertices = false;
   VertexSnapOptions SnapOptions;
   std::vector<std::vector<std::int64_t>> Visits; // per material index: the cells of its step
-  std::vector<std::int64_t> LocalIds;            // per point: id in the current step, or -1
+  std::vector<std::int64_t> LocalIds;            // per point: id in its step, or -1
+  std::vector<std::int32_t> Claims;              // per point: Batch's scratch
+  std::int32_t ClaimRound = 0;
   MultiMaterialCutCounts Counts;
 };
 
@@ -652,19 +685,75 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const double* poi
       this->Visits[material].push_back(cell);
     }
   }
-  for (std::int32_t step = 0; step + 1 < numberOfMaterials; ++step)
+  // Batches of steps with disjoint points (Batch) run side by side: a step with more than two
+  // thirds of a batch's cells runs first, alone, with the threads in its loops; the others run
+  // one per thread (their loops then run on that thread). Each step is computed from the state
+  // the earlier steps leave, and the steps are applied in order, so the result is that of the
+  // steps one after the other, whatever the number of threads.
+  std::vector<StepWork> works;
+  for (std::int32_t first = 0; first + 1 < numberOfMaterials;)
   {
     if (executor.ShouldAbort())
     {
       return Status::Aborted();
     }
-    Status status = this->Step(step, executor);
-    if (!status.IsOk())
+    const std::vector<std::int32_t> batch =
+      options.StepsSideBySide ? this->Batch(first) : std::vector<std::int32_t>{ first };
+    works.assign(batch.size(), StepWork());
+    std::int64_t total = 0;
+    for (std::size_t i = 0; i < batch.size(); ++i)
     {
-      return status;
+      works[i].Step = batch[i];
+      works[i].Cells.swap(this->Visits[batch[i]]);
+      total += static_cast<std::int64_t>(works[i].Cells.size());
     }
-    std::vector<std::int64_t>().swap(this->Visits[step]);
-    executor.ReportProgress(static_cast<double>(step + 1) / numberOfMaterials);
+    std::vector<std::size_t> beside;
+    for (std::size_t i = 0; i < works.size(); ++i)
+    {
+      if (3 * static_cast<std::int64_t>(works[i].Cells.size()) > 2 * total)
+      {
+        works[i].Result = this->ComputeStep(works[i], executor);
+      }
+      else
+      {
+        beside.push_back(i);
+      }
+    }
+    struct StepKernel
+    {
+      using Scratch = NoScratch;
+      MultiMaterialCut* Self;
+      std::vector<StepWork>* Works;
+      const std::vector<std::size_t>* Beside;
+      Executor* Exec;
+      void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+      {
+        for (std::int64_t i = begin; i < end; ++i)
+        {
+          StepWork& work = (*this->Works)[(*this->Beside)[i]];
+          work.Result = this->Self->ComputeStep(work, *this->Exec);
+        }
+      }
+    };
+    this->Counts.SideBySideSteps +=
+      beside.size() > 1 ? static_cast<std::int64_t>(beside.size()) : 0;
+    StepKernel kernel{ this, &works, &beside, &executor };
+    executor.For(0, static_cast<std::int64_t>(beside.size()), 1, kernel);
+    if (executor.ShouldAbort())
+    {
+      return Status::Aborted();
+    }
+    for (StepWork& work : works)
+    {
+      if (!work.Result.IsOk())
+      {
+        return work.Result;
+      }
+      this->CommitStep(work);
+      work = StepWork();
+    }
+    first = batch.back() + 1;
+    executor.ReportProgress(static_cast<double>(first) / numberOfMaterials);
   }
   for (std::int32_t& material : this->CellMaterials)
   {
@@ -678,24 +767,67 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const double* poi
 }
 
 template <int Dim>
-template <class Executor>
-Status MultiMaterialCut<Dim>::Step(std::int32_t step, Executor& executor)
+std::vector<std::int32_t> MultiMaterialCut<Dim>::Batch(std::int32_t first)
 {
-  std::vector<std::int64_t>& cells = this->Visits[step];
+  // The next step joins the batch when its points are none of the batch's: the points of a
+  // step's cells are the points that carry its material, so such steps read and write disjoint
+  // cells, points and fraction rows, and none adds cells to another's list (a piece or a
+  // snapped point carries only materials of its parent cell's points). At most Window steps:
+  // the test scans every cell of each.
+  constexpr std::size_t Window = 8;
+  if (++this->ClaimRound == std::numeric_limits<std::int32_t>::max())
+  {
+    std::fill(this->Claims.begin(), this->Claims.end(), 0);
+    this->ClaimRound = 1;
+  }
+  this->Claims.resize(static_cast<std::size_t>(this->GetNumberOfPoints()), 0);
+  std::vector<std::int32_t> batch;
+  for (std::int32_t step = first; step + 1 < this->NumberOfMaterials && batch.size() < Window;
+       ++step)
+  {
+    for (const std::int64_t cell : this->Visits[step])
+    {
+      const std::int64_t* ids = this->Cells.data() + cell * (Dim + 1);
+      for (int v = 0; v <= Dim; ++v)
+      {
+        if (this->Claims[ids[v]] == this->ClaimRound)
+        {
+          return batch;
+        }
+      }
+    }
+    for (const std::int64_t cell : this->Visits[step])
+    {
+      const std::int64_t* ids = this->Cells.data() + cell * (Dim + 1);
+      for (int v = 0; v <= Dim; ++v)
+      {
+        this->Claims[ids[v]] = this->ClaimRound;
+      }
+    }
+    batch.push_back(step);
+  }
+  return batch;
+}
+
+template <int Dim>
+template <class Executor>
+Status MultiMaterialCut<Dim>::ComputeStep(StepWork& work, Executor& executor)
+{
+  std::vector<std::int64_t>& cells = work.Cells;
+  // Snapping adds cells that may be listed already.
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
   if (cells.empty())
   {
     return Status::Ok();
   }
-  // Snapping adds cells that may be listed already.
-  std::sort(cells.begin(), cells.end());
-  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
-  ++this->Counts.Steps;
-  this->Counts.VisitedCells += static_cast<std::int64_t>(cells.size());
+  const std::int32_t step = work.Step;
   const auto count = static_cast<std::int64_t>(cells.size());
 
   // The step's points, numbered in order of first use, and the cells in those numbers.
-  std::vector<std::int64_t> points;
-  std::vector<std::int64_t> local(static_cast<std::size_t>(count * (Dim + 1)));
+  std::vector<std::int64_t>& points = work.Points;
+  std::vector<std::int64_t>& local = work.Local;
+  local.resize(static_cast<std::size_t>(count * (Dim + 1)));
   for (std::int64_t c = 0; c < count; ++c)
   {
     const std::int64_t* ids = this->Cells.data() + cells[c] * (Dim + 1);
@@ -719,12 +851,19 @@ Status MultiMaterialCut<Dim>::Step(std::int32_t step, Executor& executor)
   {
     values[p] = this->StepValue(points[p], step);
   }
+  // The fraction row of a local point once this step's snaps are applied.
+  std::vector<std::int64_t> movedRows;
   if (this->SnapVertices)
   {
-    const Status snapped = this->SnapStep(step, cells, points, local, values, executor);
+    const Status snapped = this->SnapStep(work, values, executor);
     if (!snapped.IsOk())
     {
       return snapped;
+    }
+    movedRows.assign(points.size(), -1);
+    for (std::size_t i = 0; i < work.MovedPoints.size(); ++i)
+    {
+      movedRows[work.MovedPoints[i]] = static_cast<std::int64_t>(i);
     }
   }
   auto allZeroSide = [&](std::int64_t c)
@@ -734,10 +873,13 @@ Status MultiMaterialCut<Dim>::Step(std::int32_t step, Executor& executor)
     {
       return CutSide::Inside;
     }
-    const std::int64_t* ids = this->Cells.data() + cells[c] * (Dim + 1);
     for (int v = 0; v <= Dim && original < step; ++v)
     {
-      if (this->Fractions.Of(ids[v], step) > 0.0)
+      const std::int64_t id = local[c * (Dim + 1) + v];
+      const std::int64_t row = movedRows.empty() ? -1 : movedRows[id];
+      const double fraction =
+        row >= 0 ? work.MovedFractions.Of(row, step) : this->Fractions.Of(points[id], step);
+      if (fraction > 0.0)
       {
         return CutSide::Inside;
       }
@@ -755,24 +897,66 @@ Status MultiMaterialCut<Dim>::Step(std::int32_t step, Executor& executor)
     return status;
   }
   const std::int64_t pieces = cut.GetNumberOfCells();
-  std::vector<std::int64_t> pieceIds(static_cast<std::size_t>(pieces * (Dim + 1)));
-  std::vector<std::int64_t> parents(static_cast<std::size_t>(pieces));
-  std::vector<std::uint8_t> sides(static_cast<std::size_t>(pieces));
-  status = cut.WriteCells(local.data(), pieceIds.data(), parents.data(), sides.data(), quiet);
-  if (!status.IsOk())
+  work.PieceIds.resize(static_cast<std::size_t>(pieces * (Dim + 1)));
+  work.Parents.resize(static_cast<std::size_t>(pieces));
+  work.Sides.resize(static_cast<std::size_t>(pieces));
+  status = cut.WriteCells(
+    local.data(), work.PieceIds.data(), work.Parents.data(), work.Sides.data(), quiet);
+  work.CutEdges = cut.GetCutEdges();
+  return status;
+}
+
+template <int Dim>
+void MultiMaterialCut<Dim>::CommitStep(StepWork& work)
+{
+  const std::vector<std::int64_t>& cells = work.Cells;
+  if (cells.empty())
   {
-    return status;
+    return;
+  }
+  const std::int32_t step = work.Step;
+  const std::vector<std::int64_t>& points = work.Points;
+  ++this->Counts.Steps;
+  this->Counts.VisitedCells += static_cast<std::int64_t>(cells.size());
+
+  // The snapped points: their places and fractions (the cut points below interpolate them).
+  this->Counts.SnappedPoints += work.Snapped;
+  for (std::size_t i = 0; i < work.MovedPoints.size(); ++i)
+  {
+    const std::int64_t point = points[work.MovedPoints[i]];
+    this->Fractions.ReplaceRow(point, work.MovedFractions, static_cast<std::int64_t>(i));
+    std::copy(work.MovedPlaces.data() + i * Dim, work.MovedPlaces.data() + (i + 1) * Dim,
+      this->Points.data() + point * Dim);
+  }
+  // A moved point may now carry materials its cells did not: they join those steps (which
+  // drop repeated cells), so that every cell around a later cut edge is cut.
+  std::vector<std::int32_t> later;
+  for (std::size_t c = 0; c < cells.size() && !work.MovedPoints.empty(); ++c)
+  {
+    bool touched = false;
+    for (int v = 0; v <= Dim; ++v)
+    {
+      touched = touched || work.Moved[work.Local[c * (Dim + 1) + v]] != 0;
+    }
+    if (touched)
+    {
+      this->LaterMaterials(this->Cells.data() + cells[c] * (Dim + 1), step, later);
+      for (const std::int32_t material : later)
+      {
+        this->Visits[material].push_back(cells[c]);
+      }
+    }
   }
 
   // The cut points: appended with interpolated fractions.
   const std::int64_t firstAdded = this->GetNumberOfPoints();
-  for (const CutEdge& edge : cut.GetCutEdges())
+  for (const CutEdge& edge : work.CutEdges)
   {
     const std::int64_t a = points[edge.A], b = points[edge.B];
     this->Fractions.AppendInterpolated(this->Fractions, a, b, edge.T);
     this->AddedPoints.push_back(CutEdge{ a, b, edge.T });
   }
-  const auto added = static_cast<std::int64_t>(cut.GetCutEdges().size());
+  const auto added = static_cast<std::int64_t>(work.CutEdges.size());
   this->Counts.AddedPoints += added;
   if (!this->Points.empty())
   {
@@ -799,7 +983,8 @@ Status MultiMaterialCut<Dim>::Step(std::int32_t step, Executor& executor)
 
   // Each parent's first piece takes its slot, the others are appended and visited by the later
   // steps of the materials its parent carries.
-  std::vector<std::int32_t> later;
+  const auto pieces = static_cast<std::int64_t>(work.Parents.size());
+  const std::vector<std::int64_t>& parents = work.Parents;
   std::int64_t ids[Dim + 1];
   for (std::int64_t first = 0; first < pieces;)
   {
@@ -827,11 +1012,11 @@ Status MultiMaterialCut<Dim>::Step(std::int32_t step, Executor& executor)
     {
       for (int v = 0; v <= Dim; ++v)
       {
-        ids[v] = global(pieceIds[piece * (Dim + 1) + v]);
+        ids[v] = global(work.PieceIds[piece * (Dim + 1) + v]);
       }
-      const std::int32_t material = before != Remaining         ? before
-        : static_cast<CutSide>(sides[piece]) == CutSide::Inside ? step
-                                                                : Remaining;
+      const std::int32_t material = before != Remaining              ? before
+        : static_cast<CutSide>(work.Sides[piece]) == CutSide::Inside ? step
+                                                                     : Remaining;
       std::int64_t cell = slot;
       if (piece != first)
       {
@@ -858,15 +1043,15 @@ Status MultiMaterialCut<Dim>::Step(std::int32_t step, Executor& executor)
     }
     first = last;
   }
-  return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
 }
 
 template <int Dim>
 template <class Executor>
-Status MultiMaterialCut<Dim>::SnapStep(std::int32_t step, const std::vector<std::int64_t>& cells,
-  const std::vector<std::int64_t>& points, const std::vector<std::int64_t>& local,
-  std::vector<double>& values, Executor& executor)
+Status MultiMaterialCut<Dim>::SnapStep(
+  StepWork& work, std::vector<double>& values, Executor& executor)
 {
+  const std::int32_t step = work.Step;
+  const std::vector<std::int64_t>& points = work.Points;
   const auto count = static_cast<std::int64_t>(points.size());
   std::vector<double> coordinates(static_cast<std::size_t>(count * Dim));
   std::vector<std::uint8_t> movable(static_cast<std::size_t>(count), 0);
@@ -883,56 +1068,30 @@ Status MultiMaterialCut<Dim>::SnapStep(std::int32_t step, const std::vector<std:
   options.Movable = movable.data();
   QuietExecutor<Executor> quiet{ &executor };
   VertexSnap<Dim> snap;
-  const Status status = snap.Snap(coordinates.data(), values.data(), count, local.data(),
-    static_cast<std::int64_t>(local.size()) / (Dim + 1), options, quiet);
+  const Status status = snap.Snap(coordinates.data(), values.data(), count, work.Local.data(),
+    static_cast<std::int64_t>(work.Local.size()) / (Dim + 1), options, quiet);
   if (!status.IsOk())
   {
     return status;
   }
-  this->Counts.SnappedPoints += snap.GetCounts().Snapped;
+  work.Snapped = snap.GetCounts().Snapped;
   // A moved point takes the fractions of the place it moved to on its edge, from the rows as
   // they were before any of this step's moves.
-  const std::vector<std::uint8_t>& moved = snap.GetMovedFlags();
+  work.Moved = snap.GetMovedFlags();
   const std::vector<std::int64_t>& edges = snap.GetSnapEdges();
-  MaterialFractions staged;
-  std::vector<std::int64_t> movedPoints;
   for (std::int64_t p = 0; p < count; ++p)
   {
-    if (!moved[p])
+    if (!work.Moved[p])
     {
       continue;
     }
     const std::int64_t w = edges[p];
-    const double other = moved[w] ? before[w] : values[w];
+    const double other = work.Moved[w] ? before[w] : values[w];
     const double t = std::min(1.0, std::max(0.0, before[p] / (before[p] - other)));
-    staged.AppendInterpolated(this->Fractions, points[p], points[w], t);
-    movedPoints.push_back(p);
-  }
-  for (std::size_t i = 0; i < movedPoints.size(); ++i)
-  {
-    const std::int64_t p = movedPoints[i];
-    this->Fractions.ReplaceRow(points[p], staged, static_cast<std::int64_t>(i));
-    std::copy(coordinates.data() + p * Dim, coordinates.data() + (p + 1) * Dim,
-      this->Points.data() + points[p] * Dim);
-  }
-  // A moved point may now carry materials its cells did not: they join those steps (which
-  // drop repeated cells), so that every cell around a later cut edge is cut.
-  std::vector<std::int32_t> later;
-  for (std::size_t c = 0; c < cells.size() && !movedPoints.empty(); ++c)
-  {
-    bool touched = false;
-    for (int v = 0; v <= Dim; ++v)
-    {
-      touched = touched || moved[local[c * (Dim + 1) + v]] != 0;
-    }
-    if (touched)
-    {
-      this->LaterMaterials(this->Cells.data() + cells[c] * (Dim + 1), step, later);
-      for (const std::int32_t material : later)
-      {
-        this->Visits[material].push_back(cells[c]);
-      }
-    }
+    work.MovedFractions.AppendInterpolated(this->Fractions, points[p], points[w], t);
+    work.MovedPoints.push_back(p);
+    work.MovedPlaces.insert(
+      work.MovedPlaces.end(), coordinates.data() + p * Dim, coordinates.data() + (p + 1) * Dim);
   }
   return Status::Ok();
 }

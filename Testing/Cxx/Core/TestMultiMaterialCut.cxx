@@ -103,11 +103,13 @@ struct CutMesh
 
 /// The cut, with the quality-driven snap before each step when `snap`.
 template <int D, class Executor>
-CutMesh<D> Cut(const LabelledMesh<D>& labelled, Executor& executor, bool snap = false)
+CutMesh<D> Cut(const LabelledMesh<D>& labelled, Executor& executor, bool snap = false,
+  bool stepsSideBySide = true)
 {
   stm::MultiMaterialCut<D> cut;
   stm::MultiMaterialCutOptions options;
   options.SnapVertices = snap;
+  options.StepsSideBySide = stepsSideBySide;
   const std::vector<double> coordinates = labelled.Mesh.Coordinates();
   EXPECT_TRUE(cut
                 .Run(labelled.Mesh.GetNumberOfPoints(), snap ? coordinates.data() : nullptr,
@@ -464,6 +466,78 @@ TYPED_TEST(MultiMaterialCutTest, SameResultOnAnyNumberOfThreads)
     EXPECT_EQ(other.Cells, reference.Cells) << threads << " threads";
     EXPECT_EQ(other.Labels, reference.Labels) << threads << " threads";
     EXPECT_EQ(other.Points, reference.Points) << threads << " threads";
+  }
+}
+
+// Steps whose points are disjoint (labels that do not touch) are computed side by side and
+// applied in order: the result is that of the steps one at a time, bit for bit, with and
+// without snapping and on any number of threads.
+TYPED_TEST(MultiMaterialCutTest, StepsSideBySideGiveTheResultOfOneAtATime)
+{
+  constexpr int D = TypeParam::value;
+  // Labels 1 to 4 in boxes six voxels apart and from the border (disjoint steps), 5 and 6
+  // touching each other and 4.
+  const std::int64_t extent = 29;
+  LabelImage<D> image(UniformExtents<D>(extent));
+  ForEachIndex<D>(image.GetDimensions(),
+    [&](const stm::LatticeIndex<D>& voxel)
+    {
+      const std::int64_t x = voxel[0], y = voxel[1];
+      const bool low = y >= 6 && y < 10, high = y >= 16 && y < 20;
+      stm::MaterialIndex label = 0;
+      if (low && x >= 6 && x < 10)
+      {
+        label = 1;
+      }
+      else if (low && x >= 16 && x < 20)
+      {
+        label = 2;
+      }
+      else if (high && x >= 6 && x < 10)
+      {
+        label = 3;
+      }
+      else if (high && x >= 16 && x < 20)
+      {
+        label = 4;
+      }
+      else if (high && x >= 20 && x < 22)
+      {
+        label = 5;
+      }
+      else if (y >= 12 && y < 20 && x >= 22 && x < 24)
+      {
+        label = 6;
+      }
+      if (label != 0 && (D < 3 || (voxel[D - 1] >= 6 && voxel[D - 1] < 20)))
+      {
+        image.Set(voxel, label);
+      }
+    });
+  // Leaves of at most 2 voxels: a step's cells reach at most that far from its label.
+  const LabelledMesh<D> labelled = Tessellate<D>(image, 2);
+  ASSERT_EQ(labelled.GetNumberOfMaterials(), 7);
+  for (const bool snap : { false, true })
+  {
+    stm::SequentialExecutor sequential;
+    const CutMesh<D> oneAtATime = Cut<D>(labelled, sequential, snap, false);
+    EXPECT_EQ(oneAtATime.Counts.SideBySideSteps, 0);
+    const stm::MeshInvariantReport report =
+      stm::CheckSimplicialMesh<D>(oneAtATime.Points, oneAtATime.Cells, &oneAtATime.Labels);
+    EXPECT_TRUE(report.IsValid()) << report.Summary();
+    for (const int threads : { 1, 2, 3 })
+    {
+      stm::ThreadPoolExecutor pool(threads);
+      const CutMesh<D> batched = Cut<D>(labelled, pool, snap, true);
+      // Steps 0 to 3 (labels 1 to 4) in one batch; 4 (label 5, touching 4) starts the next.
+      EXPECT_EQ(batched.Counts.SideBySideSteps, 4) << threads << " threads";
+      EXPECT_EQ(batched.Counts.Steps, oneAtATime.Counts.Steps);
+      EXPECT_EQ(batched.Counts.SnappedPoints, oneAtATime.Counts.SnappedPoints);
+      EXPECT_EQ(batched.Counts.AddedPoints, oneAtATime.Counts.AddedPoints);
+      EXPECT_EQ(batched.Cells, oneAtATime.Cells) << threads << " threads, snap " << snap;
+      EXPECT_EQ(batched.Labels, oneAtATime.Labels) << threads << " threads, snap " << snap;
+      EXPECT_EQ(batched.Points, oneAtATime.Points) << threads << " threads, snap " << snap;
+    }
   }
 }
 
