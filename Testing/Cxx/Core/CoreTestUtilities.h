@@ -9,6 +9,7 @@
 
 #include "Balance/SpacetreeBalance.h"
 #include "Check/MeshInvariants.h"
+#include "Check/SimplexQuality.h"
 #include "Common/CubeInfo.h"
 #include "Common/Determinant.h"
 #include "Common/Execution.h"
@@ -562,6 +563,25 @@ ComponentsKept CheckComponentsKept(const LabelImage<D>& image, const std::vector
     kept.Split += own > 1 ? 1 : 0;
   }
   return kept;
+}
+
+/// The largest condition number of the simplices (D + 1 point ids each, D coordinates per
+/// point).
+template <int D>
+double WorstSimplexCondition(
+  const std::vector<double>& points, const std::vector<std::int64_t>& cells)
+{
+  double worst = 0.0;
+  for (std::size_t c = 0; c < cells.size() / (D + 1); ++c)
+  {
+    const double* corners[D + 1];
+    for (int k = 0; k <= D; ++k)
+    {
+      corners[k] = points.data() + cells[c * (D + 1) + k] * D;
+    }
+    worst = std::max(worst, stm::MeasureSimplex<D>(corners).Condition);
+  }
+  return worst;
 }
 
 template <int D>

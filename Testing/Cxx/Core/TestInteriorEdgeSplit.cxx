@@ -5,6 +5,8 @@
 // same volume per material; an edge between two materials or on the outer boundary is never
 // split, and bad options are refused.
 
+#include "CoreTestUtilities.h"
+
 #include "Check/MeshInvariants.h"
 #include "Check/SimplexQuality.h"
 #include "Common/Execution.h"
@@ -71,22 +73,6 @@ StarMesh<D> Star()
   return mesh;
 }
 
-template <int D>
-double WorstCondition(const StarMesh<D>& mesh)
-{
-  double worst = 0.0;
-  for (std::size_t c = 0; c < mesh.Materials.size(); ++c)
-  {
-    const double* corners[D + 1];
-    for (int v = 0; v <= D; ++v)
-    {
-      corners[v] = mesh.Points.data() + mesh.Cells[c * (D + 1) + v] * D;
-    }
-    worst = std::max(worst, stm::MeasureSimplex<D>(corners).Condition);
-  }
-  return worst;
-}
-
 /// The mesh with the edits applied.
 template <int D>
 StarMesh<D> Apply(const StarMesh<D>& mesh, const stm::InteriorEdgeSplit<D>& split)
@@ -138,7 +124,7 @@ TYPED_TEST(InteriorEdgeSplitTest, LongInteriorEdgeIsSplitAtItsMidpoint)
   const std::int64_t cells = static_cast<std::int64_t>(mesh.Materials.size());
   stm::InteriorEdgeSplitOptions options;
   options.MaxConditionNumber = 2.0;
-  const double before = WorstCondition<D>(mesh);
+  const double before = stmtest::WorstSimplexCondition<D>(mesh.Points, mesh.Cells);
   EXPECT_GT(before, options.MaxConditionNumber);
   stm::InteriorEdgeSplit<D> split;
   ASSERT_TRUE(RunSplit<D>(mesh, options, split).IsOk());
@@ -160,7 +146,7 @@ TYPED_TEST(InteriorEdgeSplitTest, LongInteriorEdgeIsSplitAtItsMidpoint)
     stm::CheckSimplicialMesh<D>(mesh.Points, mesh.Cells, &mesh.Materials);
   EXPECT_NEAR(report.VolumePerMaterial.at(1), input.VolumePerMaterial.at(1), 1e-14);
   EXPECT_EQ(report.BoundaryFacets, input.BoundaryFacets);
-  const double after = WorstCondition<D>(out);
+  const double after = stmtest::WorstSimplexCondition<D>(out.Points, out.Cells);
   EXPECT_LT(after, before);
   EXPECT_NEAR(before, D == 2 ? 2.97335 : 2.57477, 1e-5);
   EXPECT_NEAR(after, D == 2 ? 2.09771 : 1.86476, 1e-5);

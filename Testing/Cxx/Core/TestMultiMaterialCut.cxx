@@ -143,23 +143,6 @@ CutMesh<D> Cut(const LabelledMesh<D>& labelled, Executor& executor, bool snap = 
   return result;
 }
 
-/// The largest condition number of the simplices.
-template <int D>
-double WorstCondition(const CutMesh<D>& mesh)
-{
-  double worst = 0.0;
-  for (std::size_t c = 0; c < mesh.Labels.size(); ++c)
-  {
-    const double* corners[D + 1];
-    for (int k = 0; k <= D; ++k)
-    {
-      corners[k] = mesh.Points.data() + mesh.Cells[c * (D + 1) + k] * D;
-    }
-    worst = std::max(worst, stm::MeasureSimplex<D>(corners).Condition);
-  }
-  return worst;
-}
-
 /// Checks a case: a valid conforming mesh, the voxels' components of every label, and every
 /// body label's volume within `relativeVolume` of its voxels' (the background's mesh extends
 /// beyond the image). Returns the cut mesh and its report.
@@ -558,7 +541,8 @@ TYPED_TEST(MultiMaterialCutTest, SnappingKeepsValidityAndImprovesTheWorstElement
   EXPECT_EQ(CellComponents<D>(snapped.Cells, snapped.Labels), VoxelComponents<D>(image));
   EXPECT_GT(snapped.Counts.SnappedPoints, 0);
   EXPECT_LT(snapped.Counts.AddedPoints, plain.Counts.AddedPoints);
-  const double before = WorstCondition<D>(plain), after = WorstCondition<D>(snapped);
+  const double before = WorstSimplexCondition<D>(plain.Points, plain.Cells),
+               after = WorstSimplexCondition<D>(snapped.Points, snapped.Cells);
   std::cout << "worst condition " << before << " -> " << after << ", "
             << snapped.Counts.SnappedPoints << " snaps\n";
   EXPECT_LT(after, 0.5 * before);
