@@ -162,6 +162,10 @@ def smooth_line(smooth):
                                                           smooth["rejected_moves"])
     if smooth["improved_points"] > 0:
         line += ", %d quality improvement moves" % smooth["improved_points"]
+    if smooth["split_edges"] > 0:
+        line += ", %d split edges" % smooth["split_edges"]
+    if smooth["kept_points"] > 0:
+        line += ", %d points kept for small parts" % smooth["kept_points"]
     return line
 
 
@@ -2821,6 +2825,17 @@ def case_report_cut(c):
           "--keep outside: material 1: %s" % one)
     check("materials: 1 material, 1 lost component (of 1), largest volume error -100.00% "
           "(material 1)" in out.splitlines(), "--keep outside: bad materials line")
+    # The lost component is listed, with its first voxel (in memory order: x fastest).
+    first = next([i, j, k] for k in range(25) for j in range(25) for i in range(25)
+                 if big_ball(i, j, k) == 1)
+    check(summary["lost_components"] == [{"material": 1, "voxels": body, "first_voxel": first}],
+          "--keep outside: lost_components %s, expected material 1 from %s" %
+          (summary["lost_components"], first))
+    check(("lost: material 1, %d voxels from voxel (%d, %d, %d)" % ((body,) + tuple(first)))
+          in out.splitlines(), "--keep outside: stdout does not list the lost component")
+    summary, _, _, _, _, _ = cut_run(c, image, "inside-list", ["--keep", "inside"])
+    check(summary["lost_components"] == [], "--keep inside: lost_components %s" %
+          summary["lost_components"])
     # One label as the body: it is the inside material, and the other labels map to 0.
     two, two_voxels = write_label_image(c, "two.vti", (16, 15, 14), ball)
     summary, _, _, _, _, _ = cut_run(c, two, "label3", ["--labels", "3"], inside=3)

@@ -1950,6 +1950,7 @@ struct StageReport
   long long RejectedMoves = -1;
   long long ImprovedPoints = -1;
   long long SplitEdges = -1;
+  long long KeptPoints = -1;
   long long SurfaceCells = -1;
 };
 
@@ -3118,6 +3119,10 @@ void PrintTable(const std::vector<StageReport>& stages, double totalSeconds)
     {
       std::cout << ", " << stage.SplitEdges << " split edges";
     }
+    if (stage.KeptPoints > 0)
+    {
+      std::cout << ", " << stage.KeptPoints << " points kept for small parts";
+    }
     if (stage.SurfaceCells >= 0)
     {
       std::cout << "; a surface of " << stage.SurfaceCells << ' '
@@ -3333,10 +3338,19 @@ struct MaterialReport
   long long LostComponents = 0;
 };
 
+/// One lost component: its material, its size and its first voxel in memory order (i, j, k).
+struct LostComponent
+{
+  long long Material = 0;
+  long long Voxels = 0;
+  int FirstVoxel[3] = { 0, 0, 0 };
+};
+
 struct StructureReport
 {
   bool Made = false; // false for surface output: "materials": null
   std::vector<MaterialReport> Materials;
+  std::vector<LostComponent> Lost; // in the order of their first voxels
   double Seconds = 0.0;
 };
 
@@ -3494,7 +3508,8 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
       json << ", \"moved_points\": " << JsonCount(stage.MovedPoints)
            << ", \"rejected_moves\": " << JsonCount(stage.RejectedMoves)
            << ", \"improved_points\": " << JsonCount(stage.ImprovedPoints)
-           << ", \"split_edges\": " << JsonCount(stage.SplitEdges);
+           << ", \"split_edges\": " << JsonCount(stage.SplitEdges)
+           << ", \"kept_points\": " << JsonCount(stage.KeptPoints);
       if (stage.SurfaceCells >= 0)
       {
         json << ", \"surface_cells\": " << stage.SurfaceCells;
@@ -3541,6 +3556,16 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
       separator = ",\n";
     }
     json << (summary.Structure.Materials.empty() ? "],\n" : "\n  ],\n");
+    json << "  \"lost_components\": [";
+    separator = "\n";
+    for (const LostComponent& entry : summary.Structure.Lost)
+    {
+      json << separator << "    {\"material\": " << entry.Material
+           << ", \"voxels\": " << entry.Voxels << ", \"first_voxel\": [" << entry.FirstVoxel[0]
+           << ", " << entry.FirstVoxel[1] << ", " << entry.FirstVoxel[2] << "]}";
+      separator = ",\n";
+    }
+    json << (summary.Structure.Lost.empty() ? "],\n" : "\n  ],\n");
     json << "  \"report_seconds\": " << std::setprecision(6) << summary.Structure.Seconds << ",\n";
   }
   else
@@ -3914,6 +3939,7 @@ vtkSmartPointer<vtkPointSet> RunSmooth(vtkSmartPointer<vtkUnstructuredGrid> grid
   report.RejectedMoves = static_cast<long long>(smooth->GetNumberOfRejectedMoves());
   report.ImprovedPoints = static_cast<long long>(smooth->GetNumberOfImprovedPoints());
   report.SplitEdges = static_cast<long long>(smooth->GetNumberOfSplitEdges());
+  report.KeptPoints = static_cast<long long>(smooth->GetNumberOfKeptPoints());
   if (!options.WritesSurface() && options.KeepSide == stmMarchingSimplices::BOTH)
   {
     return grid;
@@ -4446,11 +4472,16 @@ StructureReport MakeStructureReport(
     }
   }
   std::vector<std::pair<vtkIdType, vtkIdType>> samples; // (voxel index, component)
+  std::vector<vtkIdType> firstVoxel(static_cast<std::size_t>(numberOfComponents), 0);
   for (vtkIdType component = 0; component < numberOfComponents; ++component)
   {
     if (!counted[component])
     {
       continue;
+    }
+    {
+      const vtkIdType run = componentRuns[componentRunBegin[component]];
+      firstVoxel[component] = runRow[run] * nx + runs[run].Start;
     }
     const long long size = componentSize[component];
     const long long count = std::min(size, sampleLimit);
@@ -4634,6 +4665,13 @@ StructureReport MakeStructureReport(
     if (counted[component] && !present[component].load())
     {
       ++lost[componentIndex[component]];
+      LostComponent entry;
+      entry.Material = componentMaterial[component];
+      entry.Voxels = componentSize[component];
+      entry.FirstVoxel[0] = static_cast<int>(firstVoxel[component] % nx);
+      entry.FirstVoxel[1] = static_cast<int>(firstVoxel[component] / nx % ny);
+      entry.FirstVoxel[2] = static_cast<int>(firstVoxel[component] / nx / ny);
+      report.Lost.push_back(entry);
     }
   }
   for (std::size_t m = 0; m < materials; ++m)
@@ -4693,6 +4731,26 @@ void PrintStructureReport(const StructureReport& report)
     std::cout << "n/a";
   }
   std::cout << '\n';
+  // The first few lost body components, where to look (all of them are in --summary).
+  const std::size_t shown = 10;
+  std::size_t listed = 0;
+  for (const LostComponent& entry : report.Lost)
+  {
+    if (entry.Material == 0)
+    {
+      continue;
+    }
+    if (listed == shown)
+    {
+      std::cout << "lost: ... (" << lost - static_cast<long long>(shown)
+                << " more in the --summary file)\n";
+      break;
+    }
+    std::cout << "lost: material " << entry.Material << ", " << entry.Voxels << " voxel"
+              << (entry.Voxels == 1 ? "" : "s") << " from voxel (" << entry.FirstVoxel[0] << ", "
+              << entry.FirstVoxel[1] << ", " << entry.FirstVoxel[2] << ")\n";
+    ++listed;
+  }
 }
 
 int Run(const Options& options)

@@ -354,6 +354,7 @@ void stmBoundarySmooth::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "MaxDisplacement: " << this->MaxDisplacement << "\n";
   os << indent << "NumberOfInteriorLayers: " << this->NumberOfInteriorLayers << "\n";
   os << indent << "InteriorRelaxationInterval: " << this->InteriorRelaxationInterval << "\n";
+  os << indent << "SmallPartPoints: " << this->SmallPartPoints << "\n";
   os << indent << "MaxConditionNumber: " << this->MaxConditionNumber << "\n";
   os << indent << "MinDihedralAngle: " << this->MinDihedralAngle << "\n";
   os << indent << "NumberOfImprovementSweeps: " << this->NumberOfImprovementSweeps << "\n";
@@ -374,6 +375,7 @@ void stmBoundarySmooth::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfRejectedMoves: " << this->NumberOfRejectedMoves << "\n";
   os << indent << "NumberOfImprovedPoints: " << this->NumberOfImprovedPoints << "\n";
   os << indent << "NumberOfSplitEdges: " << this->NumberOfSplitEdges << "\n";
+  os << indent << "NumberOfKeptPoints: " << this->NumberOfKeptPoints << "\n";
   os << indent << "LargestVolumeErrorBefore: " << this->LargestVolumeErrorBefore << "\n";
   os << indent << "LargestVolumeErrorAfter: " << this->LargestVolumeErrorAfter << "\n";
 }
@@ -397,6 +399,7 @@ int stmBoundarySmooth::RequestData(
   this->NumberOfRejectedMoves = 0;
   this->NumberOfImprovedPoints = 0;
   this->NumberOfSplitEdges = 0;
+  this->NumberOfKeptPoints = 0;
   this->LargestVolumeErrorBefore = 0.0;
   this->LargestVolumeErrorAfter = 0.0;
   output->Initialize();
@@ -462,6 +465,7 @@ int stmBoundarySmooth::RequestData(
   request.Options.MaxDisplacement = this->MaxDisplacement;
   request.Options.NumberOfInteriorLayers = this->NumberOfInteriorLayers;
   request.Options.InteriorRelaxationInterval = this->InteriorRelaxationInterval;
+  request.Options.SmallPartPoints = this->SmallPartPoints;
   request.Options.MaxConditionNumber = this->MaxConditionNumber;
   request.Options.MinDihedralAngle = this->MinDihedralAngle;
   request.Options.NumberOfImprovementSweeps = this->NumberOfImprovementSweeps;
@@ -501,6 +505,7 @@ int stmBoundarySmooth::RequestData(
   this->NumberOfRejectedMoves = static_cast<vtkIdType>(request.Stats.RejectedMoves);
   this->NumberOfImprovedPoints = static_cast<vtkIdType>(request.Stats.ImprovedPoints);
   this->NumberOfSplitEdges = request.SplitEdges;
+  this->NumberOfKeptPoints = static_cast<vtkIdType>(request.Stats.KeptPoints);
   this->LargestVolumeErrorBefore = request.Stats.LargestVolumeErrorBefore;
   this->LargestVolumeErrorAfter = request.Stats.LargestVolumeErrorAfter;
   this->UpdateProgress(1.0);

@@ -14,7 +14,8 @@
  * moves only along the line, and a point where lines meet (a quadruple point) or a 2D triple
  * point stays. After every InteriorRelaxationInterval-th surface iteration and after the last,
  * NumberOfInteriorLayers rings of interior points next to the surface get one volumetric
- * Laplacian pass. Every move is validated: it
+ * Laplacian pass; small parts (a single voxel) keep the shape the cut gave them
+ * (SmallPartPoints). Every move is validated: it
  * must keep every incident cell's orientation and keep the worst condition number and the
  * smallest dihedral angle around the point within MaxConditionNumber / MinDihedralAngle (or no
  * worse than before, where they already were); else it is tried at half and a quarter of its
@@ -124,6 +125,19 @@ public:
    */
   vtkSetClampMacro(InteriorRelaxationInterval, int, 1, 1000);
   vtkGetMacro(InteriorRelaxationInterval, int);
+  ///@}
+
+  ///@{
+  /**
+   * Small parts are kept as the cut made them, so that the smoothing loses no single-voxel
+   * component: a part of one material whose interior points (on no interface) number at most
+   * this many, all within the interior layers, keeps its points (only the quality improvement
+   * may still move its surface points), and so does every interior-layer point with at most one
+   * interior neighbour (the centre of a single voxel that touches a larger part along an edge,
+   * the tip of a spike). In [0, 1000]; 0 turns both off. Default 8.
+   */
+  vtkSetClampMacro(SmallPartPoints, int, 0, 1000);
+  vtkGetMacro(SmallPartPoints, int);
   ///@}
 
   ///@{
@@ -249,6 +263,12 @@ public:
   vtkGetMacro(NumberOfSplitEdges, vtkIdType);
 
   /**
+   * Result of the last update with SmallPartPoints: the points it kept in place (interior
+   * points of small parts and tips, and the surface points of small parts).
+   */
+  vtkGetMacro(NumberOfKeptPoints, vtkIdType);
+
+  /**
    * Results of the last update with RestoreOriginalVolumes: the largest relative difference of
    * a material's volume from the volume of its original cells, before and after the
    * restoration (0 without it).
@@ -279,6 +299,7 @@ private:
   double MaxDisplacement = 0.0;
   int NumberOfInteriorLayers = 2;
   int InteriorRelaxationInterval = 4;
+  int SmallPartPoints = 8;
   double MaxConditionNumber = 3.5;
   double MinDihedralAngle = 15.0;
   int NumberOfImprovementSweeps = 10;
@@ -292,6 +313,7 @@ private:
   vtkIdType NumberOfRejectedMoves = 0;
   vtkIdType NumberOfImprovedPoints = 0;
   vtkIdType NumberOfSplitEdges = 0;
+  vtkIdType NumberOfKeptPoints = 0;
   double LargestVolumeErrorBefore = 0.0;
   double LargestVolumeErrorAfter = 0.0;
 };

@@ -354,14 +354,17 @@ TYPED_TEST(BoundarySmoothTest, TaubinKeepsTheVolumeAndLaplacianShrinksIt)
 }
 
 // The outer-boundary points of background cells (the box) do not move, bit for bit, and are
-// the fixed points; every surface point lies at the ball's radius within a cell size.
+// the fixed points (without small parts, whose kept interior points are fixed too); every
+// surface point lies at the ball's radius within a cell size.
 TYPED_TEST(BoundarySmoothTest, BackgroundBoxStaysBitIdentical)
 {
   constexpr int D = TypeParam::value;
   const SmoothMesh<D> input = CutBall<D>(Extent<D>(), 0.35);
   SmoothMesh<D> mesh = input;
   std::vector<std::uint8_t> roles;
-  const stm::BoundarySmoothStats stats = Smooth<D>(mesh, stm::BoundarySmoothOptions(), &roles);
+  stm::BoundarySmoothOptions options;
+  options.SmallPartPoints = 0;
+  const stm::BoundarySmoothStats stats = Smooth<D>(mesh, options, &roles);
   std::int64_t onBox = 0;
   for (std::int64_t p = 0; p < mesh.NumberOfPoints(); ++p)
   {
@@ -1063,6 +1066,9 @@ TEST(BoundarySmooth, RejectsBadOptionsAndIds)
   options.InteriorRelaxationInterval = 0;
   EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
   options = stm::BoundarySmoothOptions();
+  options.SmallPartPoints = -1;
+  EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
+  options = stm::BoundarySmoothOptions();
   options.NumberOfImprovementSweeps = -1;
   EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
   options = stm::BoundarySmoothOptions();
@@ -1098,7 +1104,8 @@ TEST(BoundarySmooth, WithoutMaterialsTheOuterBoundaryIsTheSurface)
 }
 
 // 1D: surface points (material changes) have no surface edges and stay; interior layer points
-// move toward their neighbours' centroid. 4D: the generic code keeps a cut 4-ball valid and
+// move toward their neighbours' centroid (the two interior points of material 1 would be a small
+// part, kept, with the default SmallPartPoints). 4D: the generic code keeps a cut 4-ball valid and
 // its worst element no worse.
 TEST(BoundarySmooth, OneAndFourDimensions)
 {
@@ -1112,7 +1119,9 @@ TEST(BoundarySmooth, OneAndFourDimensions)
     line.Materials.push_back(c < 3 ? 1 : 2);
   }
   std::vector<std::uint8_t> roles;
-  const stm::BoundarySmoothStats stats = Smooth<1>(line, stm::BoundarySmoothOptions(), &roles);
+  stm::BoundarySmoothOptions lineOptions;
+  lineOptions.SmallPartPoints = 0;
+  const stm::BoundarySmoothStats stats = Smooth<1>(line, lineOptions, &roles);
   EXPECT_EQ(roles[3], stm::BoundarySmoother<1>::Surface);
   EXPECT_EQ(line.Points[3], 2.2);
   EXPECT_EQ(line.Points[0], 0.0); // the outer ends are surface points of a body material

@@ -2,11 +2,15 @@
 // Thin parts in 2D and 3D: single voxels, one-voxel plates (flat, so every corner is a tie) and
 // one-voxel lines are thin, blocks three voxels wide are not, the body-only mode joins the
 // body's labels; and refining the thin voxels to half their size makes the multi-material cut keep
-// every face-connected component of a speckled random image, which the cut at voxel size loses.
+// every face-connected component of a speckled random image, which the cut at voxel size loses;
+// and the smoothing (SmallPartPoints) keeps a voxel centre of every component in a cell of its
+// label.
 
 #include "CoreTestUtilities.h"
 
+#include "Common/Determinant.h"
 #include "Cut/MultiMaterialCut.h"
+#include "Smooth/BoundarySmooth.h"
 #include "Spacetree/ThinParts.h"
 
 #include <gtest/gtest.h>
@@ -109,13 +113,29 @@ TYPED_TEST(ThinPartsTest, ShapesThatTheLabelsFunctionLosesOrPinches)
   }
 }
 
+/// The cut mesh: D coordinates per point (voxel units), D + 1 point ids and a label per cell.
+template <int D>
+struct CutLabels
+{
+  std::vector<double> Points;
+  std::vector<std::int64_t> Cells;
+  std::vector<std::int64_t> Labels;
+};
+
+template <int D>
+LabelImage<D> SpeckledImage()
+{
+  return MakeRandomImage<D>(FirstExtents<D>({ 19, 17, 15 }), 21, 3, 6, 80);
+}
+
 /// A speckled random image refined at its thin voxels (to half a voxel), tessellated with its
 /// background, and cut with the multi-material cut: the face-connected components of every
 /// material, against those of the voxels.
 template <int D>
-void CutSpeckledImage(bool refine, ComponentsKept& kept, std::int64_t& thinVoxels)
+void CutSpeckledImage(
+  bool refine, ComponentsKept& kept, std::int64_t& thinVoxels, CutLabels<D>* result = nullptr)
 {
-  const LabelImage<D> image = MakeRandomImage<D>(FirstExtents<D>({ 19, 17, 15 }), 21, 3, 6, 80);
+  const LabelImage<D> image = SpeckledImage<D>();
   stm::SequentialExecutor executor;
   std::vector<std::uint8_t> thin;
   ASSERT_TRUE(stm::ThinPartVoxels<D>(image.View(), false, thin, executor).IsOk());
@@ -200,6 +220,78 @@ void CutSpeckledImage(bool refine, ComponentsKept& kept, std::int64_t& thinVoxel
     }
   }
   kept = CheckComponentsKept<D>(image, points, cut.GetCells(), labels);
+  if (result)
+  {
+    result->Points = std::move(points);
+    result->Cells = cut.GetCells();
+    result->Labels = std::move(labels);
+  }
+}
+
+/// The face-connected components of the image none of whose voxel centres lies in a closed
+/// cell of its label (the test of stmesh's structure report).
+template <int D>
+std::int64_t ComponentsLostByCentres(const LabelImage<D>& image, const CutLabels<D>& mesh)
+{
+  const std::vector<std::int64_t> ids = VoxelComponentIds<D>(image);
+  std::set<std::int64_t> covered;
+  const auto cells = static_cast<std::int64_t>(mesh.Labels.size());
+  for (std::int64_t c = 0; c < cells; ++c)
+  {
+    const double* corners[D + 1];
+    stm::LatticeIndex<D> lower, upper;
+    for (int v = 0; v <= D; ++v)
+    {
+      corners[v] = mesh.Points.data() + mesh.Cells[c * (D + 1) + v] * D;
+    }
+    double edges[D][D];
+    for (int axis = 0; axis < D; ++axis)
+    {
+      double lo = corners[0][axis], hi = corners[0][axis];
+      for (int v = 1; v <= D; ++v)
+      {
+        lo = std::min(lo, corners[v][axis]);
+        hi = std::max(hi, corners[v][axis]);
+        edges[axis][v - 1] = corners[v][axis] - corners[0][axis];
+      }
+      lower[axis] = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(lo - 0.5)));
+      upper[axis] = std::min<std::int64_t>(
+        image.GetDimensions()[axis], static_cast<std::int64_t>(std::floor(hi - 0.5)) + 1);
+    }
+    const double volume = stm::Determinant<D>(edges);
+    ForEachIndexInBox<D>(lower, upper,
+      [&](const stm::LatticeIndex<D>& voxel)
+      {
+        if (image.At(voxel) != mesh.Labels[c])
+        {
+          return;
+        }
+        // Barycentric coordinates by Cramer's rule: the centre replaces one edge at a time.
+        double sum = 0.0;
+        bool inside = true;
+        for (int v = 0; v < D; ++v)
+        {
+          double replaced[D][D];
+          for (int axis = 0; axis < D; ++axis)
+          {
+            for (int k = 0; k < D; ++k)
+            {
+              replaced[axis][k] =
+                k == v ? static_cast<double>(voxel[axis]) + 0.5 - corners[0][axis] : edges[axis][k];
+            }
+          }
+          const double coordinate = stm::Determinant<D>(replaced) / volume;
+          inside = inside && coordinate >= -1e-9;
+          sum += coordinate;
+        }
+        if (inside && sum <= 1.0 + 1e-9)
+        {
+          covered.insert(ids[stm::LinearIndex<D>(voxel, image.GetDimensions())]);
+        }
+      });
+  }
+  const std::int64_t components = *std::max_element(ids.begin(), ids.end()) + 1;
+  return components - static_cast<std::int64_t>(covered.size());
 }
 
 TYPED_TEST(ThinPartsTest, RefiningThinVoxelsKeepsEveryComponent)
@@ -216,6 +308,73 @@ TYPED_TEST(ThinPartsTest, RefiningThinVoxelsKeepsEveryComponent)
   EXPECT_GT(voxelSize.Lost, 0);
   EXPECT_EQ(refined.Lost, 0);
   EXPECT_EQ(refined.Split, 0);
+}
+
+// The smoothing as stmesh runs it (Taubin, interior layers, every label's volume restored) on the
+// refined speckled image: with small parts kept (the default), every component keeps a voxel
+// centre in a cell of its label, and the held points stay bit for bit; without (0), single
+// voxels shrink away from their centres.
+TYPED_TEST(ThinPartsTest, SmoothingKeepsAVoxelCentreOfEveryComponent)
+{
+  constexpr int D = TypeParam::value;
+  const LabelImage<D> image = SpeckledImage<D>();
+  ComponentsKept kept;
+  std::int64_t thin = 0;
+  CutLabels<D> cut;
+  CutSpeckledImage<D>(true, kept, thin, &cut);
+  ASSERT_EQ(kept.Lost, 0);
+  ASSERT_EQ(ComponentsLostByCentres<D>(image, cut), 0);
+  std::map<bool, std::int64_t> lost;
+  for (const bool keep : { true, false })
+  {
+    CutLabels<D> smoothed = cut;
+    stm::BoundarySmoothOptions options;
+    options.SmallPartPoints = keep ? stm::BoundarySmoothOptions().SmallPartPoints : 0;
+    options.VolumeTargetMaterials = cut.Labels.data();
+    stm::BoundarySmoother<D> smoother;
+    stm::SequentialExecutor executor;
+    const stm::Status status = smoother.Smooth(smoothed.Points.data(),
+      static_cast<std::int64_t>(smoothed.Points.size() / D), smoothed.Cells.data(),
+      static_cast<std::int64_t>(smoothed.Labels.size()), smoothed.Labels.data(), options, executor);
+    ASSERT_TRUE(status.IsOk()) << status.GetMessage();
+    const stm::MeshInvariantReport report =
+      stm::CheckSimplicialMesh<D>(smoothed.Points, smoothed.Cells, &smoothed.Labels);
+    EXPECT_TRUE(report.IsValid()) << report.Summary();
+    lost[keep] = ComponentsLostByCentres<D>(image, smoothed);
+    const stm::BoundarySmoothStats& stats = smoother.GetStats();
+    if (!keep)
+    {
+      EXPECT_EQ(stats.KeptPoints, 0);
+      EXPECT_EQ(stats.SmallParts, 0);
+      continue;
+    }
+    EXPECT_GT(stats.KeptPoints, 0);
+    EXPECT_GT(stats.SmallParts, 0);
+    // The fixed points (held interior points among them) stay bit for bit; the kept surface
+    // points move only where the quality improvement moves them.
+    std::int64_t fixed = 0, keptSurface = 0;
+    const std::vector<std::uint8_t>& roles = smoother.GetPointRoles();
+    for (std::size_t p = 0; p < roles.size(); ++p)
+    {
+      keptSurface += roles[p] == stm::BoundarySmoother<D>::KeptSurface;
+      if (roles[p] != stm::BoundarySmoother<D>::Fixed)
+      {
+        continue;
+      }
+      for (int axis = 0; axis < D; ++axis)
+      {
+        EXPECT_EQ(smoothed.Points[p * D + axis], cut.Points[p * D + axis]) << "point " << p;
+      }
+      ++fixed;
+    }
+    EXPECT_GT(keptSurface, 0);
+    EXPECT_LT(keptSurface, stats.KeptPoints);
+    EXPECT_GE(fixed + keptSurface, stats.KeptPoints);
+  }
+  std::cout << D << "D: components lost by their voxel centres after the smoothing: " << lost[true]
+            << " keeping small parts, " << lost[false] << " without\n";
+  EXPECT_EQ(lost[true], 0);
+  EXPECT_GT(lost[false], 0);
 }
 
 TEST(ThinParts, RejectsBadImages)
