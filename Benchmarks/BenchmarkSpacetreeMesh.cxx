@@ -57,6 +57,8 @@ vtkSmartPointer<vtkUnstructuredGrid> Spacetree(int balanceLevel)
   return result;
 }
 
+// The argument is the thin-part refinement: none (0), of the body (1) or of every material (2),
+// whose voxel tests (Filters/Core/Spacetree/ThinParts.h) read every voxel of the image.
 void BM_ImageToSpacetree(benchmark::State& state)
 {
   vtkImageData* image = Atlas();
@@ -65,6 +67,7 @@ void BM_ImageToSpacetree(benchmark::State& state)
   {
     vtkNew<stmImageToSpacetree> tree;
     tree->SetInputData(image);
+    tree->SetThinPartRefinement(static_cast<int>(state.range(0)));
     tree->Update();
     leaves = tree->GetOutput()->GetNumberOfCells();
   }
@@ -149,7 +152,12 @@ void BM_MarchingSimplices(benchmark::State& state)
     static_cast<double>(mesh->GetNumberOfCells()), benchmark::Counter::kIsIterationInvariantRate);
 }
 
-BENCHMARK(BM_ImageToSpacetree)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ImageToSpacetree)
+  ->Arg(stmImageToSpacetree::NO_THIN_PARTS)
+  ->Arg(stmImageToSpacetree::THIN_BODY_PARTS)
+  ->Arg(stmImageToSpacetree::THIN_MATERIAL_PARTS)
+  ->Unit(benchmark::kMillisecond)
+  ->UseRealTime();
 BENCHMARK(BM_SpacetreeBalance)
   ->Arg(1)
   ->Arg(2)

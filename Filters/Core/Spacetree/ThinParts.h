@@ -29,6 +29,8 @@
 #include "../Common/Status.h"
 #include "SpacetreeBuild.h"
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -80,6 +82,90 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
     return index;
   };
 
+  // Most voxels lie inside a region of one material, where every test below has its answer
+  // without counting: the kernels walk rows along axis 0 and answer those voxels (and corners)
+  // from a comparison of whole rows, which is only possible away from the image border (AAL, 7
+  // million voxels: 0.67 s with the count per voxel, 0.25 s with per-voxel comparisons, on 2
+  // threads, the tree included).
+  constexpr int Neighbours = Dim == 1 ? 3 : Dim == 2 ? 9 : Dim == 3 ? 27 : 81;
+  std::array<std::int64_t, Neighbours> aroundVoxel{}; // linear offsets of the 3^d voxels
+  std::array<int, Neighbours> centreWeights{};        // their weights at the centre (times 4^d)
+  std::vector<std::int64_t> centreRows; // offsets of the other rows with voxels around a voxel
+  std::vector<std::int64_t> cornerRows; // of the other rows with voxels at a corner
+  {
+    std::int64_t strides[Dim];
+    std::int64_t stride = 1;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      strides[axis] = stride;
+      stride *= image.Dimensions[axis];
+    }
+    for (int n = 0; n < Neighbours; ++n)
+    {
+      centreWeights[n] = 1;
+      for (int axis = 0, code = n; axis < Dim; ++axis, code /= 3)
+      {
+        aroundVoxel[n] += (code % 3 - 1) * strides[axis];
+        centreWeights[n] *= code % 3 == 1 ? 2 : 1;
+      }
+    }
+    for (int n = 0; n < Neighbours; ++n)
+    {
+      if (n % 3 == 1 && aroundVoxel[n] != 0)
+      {
+        centreRows.push_back(aroundVoxel[n]);
+      }
+    }
+    for (int k = 2; k < Around; k += 2)
+    {
+      std::int64_t offset = 0;
+      for (int axis = 1; axis < Dim; ++axis)
+      {
+        offset += ((k >> axis) & 1) * strides[axis];
+      }
+      cornerRows.push_back(offset);
+    }
+  }
+  // The material of the voxel at `linear`, as materialAt gives it.
+  auto materialOf = [&image, bodyOnly](std::int64_t linear) -> std::int32_t
+  {
+    const MaterialIndex material = image.Values[linear];
+    return bodyOnly ? (material == BackgroundMaterial ? 0 : 1) : material;
+  };
+  // same[i] = 1 where the voxel start + i has the value of the voxel start + i + offset for every
+  // offset (rows of `length` voxels; a loop the compiler vectorizes).
+  auto sameAcrossRows = [&image](std::int64_t start, std::int64_t length,
+                          const std::vector<std::int64_t>& offsets, std::vector<std::uint8_t>& same)
+  {
+    same.assign(static_cast<std::size_t>(length), 1);
+    const MaterialIndex* row = image.Values + start;
+    for (const std::int64_t offset : offsets)
+    {
+      const MaterialIndex* other = row + offset;
+      for (std::int64_t i = 0; i < length; ++i)
+      {
+        same[i] &= other[i] == row[i] ? 1 : 0;
+      }
+    }
+  };
+  // Whether the row of `linear` (in a lattice of dims) has every index but axis 0's in
+  // [1, dims - 2]: for voxels, all voxels around them exist; for corners (dims one more than the
+  // image's), all voxels at them.
+  auto rowWithin = [](std::int64_t linear, const LatticeIndex<Dim>& dims)
+  {
+    linear /= dims[0];
+    bool within = true;
+    for (int axis = 1; axis < Dim; ++axis)
+    {
+      const std::int64_t index = linear % dims[axis];
+      linear /= dims[axis];
+      within = within && index >= 1 && index <= dims[axis] - 2;
+    }
+    return within;
+  };
+  const std::int64_t rowLength = image.Dimensions[0];
+  const std::int64_t rowGrain = std::max<std::int64_t>(1, (1 << 14) / rowLength);
+
   // The strict majority material of the voxels around each corner, or -1.
   std::vector<std::int32_t> majority(static_cast<std::size_t>(cornerCount), -1);
   struct MajorityKernel
@@ -87,13 +173,57 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
     using Scratch = NoScratch;
     const decltype(materialAt)* MaterialAt;
     const decltype(unlinear)* Unlinear;
+    const decltype(materialOf)* MaterialOf;
+    const decltype(sameAcrossRows)* SameAcrossRows;
+    const decltype(rowWithin)* RowWithin;
+    const std::vector<std::int64_t>* CornerRows;
+    const MaterialImage<Dim>* Image;
     const LatticeIndex<Dim>* Corners;
     std::int32_t* Majority;
-    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    void operator()(Scratch&, std::int64_t beginRow, std::int64_t endRow) const
     {
-      for (std::int64_t c = begin; c < end; ++c)
+      const std::int64_t length = (*this->Corners)[0]; // one more than a row of voxels
+      const MaterialImage<Dim>& image = *this->Image;
+      std::vector<std::uint8_t> same;
+      for (std::int64_t row = beginRow; row < endRow; ++row)
       {
-        const LatticeIndex<Dim> corner = (*this->Unlinear)(c, *this->Corners);
+        const LatticeIndex<Dim> first = (*this->Unlinear)(row * length, *this->Corners);
+        if (!(*this->RowWithin)(row * length, *this->Corners) || length < 3)
+        {
+          for (std::int64_t i = 0; i < length; ++i)
+          {
+            this->Count(row * length + i, first, i);
+          }
+          continue;
+        }
+        // The voxels at corner i are i - 1 and i of the rows from `lowest`.
+        std::int64_t lowest = 0;
+        for (int axis = Dim - 1; axis >= 1; --axis)
+        {
+          lowest = lowest * image.Dimensions[axis] + first[axis] - 1;
+        }
+        lowest *= image.Dimensions[0];
+        (*this->SameAcrossRows)(lowest, length - 1, *this->CornerRows, same);
+        const MaterialIndex* values = image.Values + lowest;
+        this->Count(row * length, first, 0);
+        for (std::int64_t i = 1; i < length - 1; ++i)
+        {
+          if (same[i - 1] && same[i] && values[i - 1] == values[i])
+          {
+            this->Majority[row * length + i] = (*this->MaterialOf)(lowest + i);
+          }
+          else
+          {
+            this->Count(row * length + i, first, i);
+          }
+        }
+        this->Count(row * length + length - 1, first, length - 1);
+      }
+    }
+    void Count(std::int64_t c, LatticeIndex<Dim> corner, std::int64_t i) const
+    {
+      corner[0] = i;
+      {
         std::int32_t materials[Around];
         for (int k = 0; k < Around; ++k)
         {
@@ -128,56 +258,95 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
       }
     }
   };
-  MajorityKernel majorityKernel{ &materialAt, &unlinear, &corners, majority.data() };
-  executor.For(0, cornerCount, 1 << 14, majorityKernel);
+  MajorityKernel majorityKernel{ &materialAt, &unlinear, &materialOf, &sameAcrossRows, &rowWithin,
+    &cornerRows, &image, &corners, majority.data() };
+  executor.For(0, cornerCount / corners[0], rowGrain, majorityKernel);
   if (executor.ShouldAbort())
   {
     return Status::Aborted();
   }
 
-  // Whether the labels function keeps each voxel's material at its centre.
+  // Whether the labels function keeps each voxel's material at its centre: 1, or Uniform where
+  // the 3^d voxels around it are all of its material.
+  constexpr std::uint8_t Uniform = 3;
   std::vector<std::uint8_t> centreKept(static_cast<std::size_t>(voxelCount), 0);
   struct CentreKernel
   {
     using Scratch = NoScratch;
     const decltype(materialAt)* MaterialAt;
+    const decltype(materialOf)* MaterialOf;
     const decltype(unlinear)* Unlinear;
-    const LatticeIndex<Dim>* Dimensions;
+    const decltype(sameAcrossRows)* SameAcrossRows;
+    const decltype(rowWithin)* RowWithin;
+    const std::vector<std::int64_t>* CentreRows;
+    const std::array<std::int64_t, Neighbours>* AroundVoxel;
+    const std::array<int, Neighbours>* Weights;
+    const MaterialImage<Dim>* Image;
     std::uint8_t* Kept;
-    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    void operator()(Scratch&, std::int64_t beginRow, std::int64_t endRow) const
     {
-      constexpr int Neighbours = Dim == 1 ? 3 : Dim == 2 ? 9 : Dim == 3 ? 27 : 81;
-      std::int32_t materials[Neighbours];
-      int weights[Neighbours];
-      for (std::int64_t v = begin; v < end; ++v)
+      const std::int64_t length = this->Image->Dimensions[0];
+      std::vector<std::uint8_t> same;
+      for (std::int64_t row = beginRow; row < endRow; ++row)
       {
-        const LatticeIndex<Dim> voxel = (*this->Unlinear)(v, *this->Dimensions);
+        const std::int64_t start = row * length;
+        if (!(*this->RowWithin)(start, this->Image->Dimensions) || length < 3)
+        {
+          for (std::int64_t i = 0; i < length; ++i)
+          {
+            this->Kept[start + i] = this->Count(start + i, false);
+          }
+          continue;
+        }
+        // One material all around: its share is 1.
+        (*this->SameAcrossRows)(start, length, *this->CentreRows, same);
+        const MaterialIndex* values = this->Image->Values + start;
+        this->Kept[start] = this->Count(start, false);
+        for (std::int64_t i = 1; i < length - 1; ++i)
+        {
+          const bool uniform = same[i - 1] && same[i] && same[i + 1] &&
+            values[i - 1] == values[i] && values[i + 1] == values[i];
+          this->Kept[start + i] = uniform ? Uniform : this->Count(start + i, true);
+        }
+        this->Kept[start + length - 1] = this->Count(start + length - 1, false);
+      }
+    }
+    std::uint8_t Count(std::int64_t v, bool inside) const
+    {
+      std::int32_t materials[Neighbours];
+      if (inside)
+      {
+        for (int n = 0; n < Neighbours; ++n)
+        {
+          materials[n] = (*this->MaterialOf)(v + (*this->AroundVoxel)[n]);
+        }
+      }
+      else
+      {
+        const LatticeIndex<Dim> voxel = (*this->Unlinear)(v, this->Image->Dimensions);
         for (int n = 0; n < Neighbours; ++n)
         {
           LatticeIndex<Dim> other = voxel;
-          int weight = 1;
           for (int axis = 0, code = n; axis < Dim; ++axis, code /= 3)
           {
             other[axis] += code % 3 - 1;
-            weight *= code % 3 == 1 ? 2 : 1;
           }
           materials[n] = (*this->MaterialAt)(other);
-          weights[n] = weight;
         }
-        const std::int32_t own = materials[(Neighbours - 1) / 2];
-        int ownSum = 0, total = 0;
-        for (int n = 0; n < Neighbours; ++n)
-        {
-          ownSum += materials[n] == own ? weights[n] : 0;
-          total += weights[n];
-        }
-        const bool kept = 2 * ownSum > total;
-        this->Kept[v] = kept ? 1 : 0;
       }
+      const std::int32_t own = materials[(Neighbours - 1) / 2];
+      int ownSum = 0, total = 0;
+      for (int n = 0; n < Neighbours; ++n)
+      {
+        ownSum += materials[n] == own ? (*this->Weights)[n] : 0;
+        total += (*this->Weights)[n];
+      }
+      return 2 * ownSum > total ? 1 : 0;
     }
   };
-  CentreKernel centreKernel{ &materialAt, &unlinear, &image.Dimensions, centreKept.data() };
-  executor.For(0, voxelCount, 1 << 14, centreKernel);
+  CentreKernel centreKernel{ &materialAt, &materialOf, &unlinear, &sameAcrossRows, &rowWithin,
+    &centreRows, &aroundVoxel, &centreWeights, &image, centreKept.data() };
+  executor.For(0, voxelCount / rowLength, rowGrain, centreKernel);
   if (executor.ShouldAbort())
   {
     return Status::Aborted();
@@ -186,14 +355,14 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
   // Whether each voxel's face-connected component has a voxel that keeps it: a search from each
   // voxel that does not, stopped at the first voxel that does (most components reach one
   // within a step or two; only components that have none are walked whole).
-  std::vector<std::uint8_t> componentKept = centreKept; // 1: kept, 0: unknown, 2: not kept
+  // 1 or Uniform: kept, 0: unknown, 2: not kept.
+  std::vector<std::uint8_t> componentKept = std::move(centreKept);
   std::vector<std::int64_t> visited, stack;
-  for (std::int64_t start = 0; start < voxelCount; ++start)
+  for (auto unknown = std::find(componentKept.begin(), componentKept.end(), 0);
+       unknown != componentKept.end();
+       unknown = std::find(unknown + 1, componentKept.end(), std::uint8_t{ 0 }))
   {
-    if (componentKept[start] != 0)
-    {
-      continue;
-    }
+    const std::int64_t start = unknown - componentKept.begin();
     const std::int32_t own = materialAt(unlinear(start, image.Dimensions));
     visited.assign(1, start);
     stack.assign(1, start);
@@ -215,7 +384,7 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
             continue;
           }
           const std::int64_t index = LinearIndex<Dim>(neighbour, image.Dimensions);
-          if (componentKept[index] == 1)
+          if (componentKept[index] == 1 || componentKept[index] == Uniform)
           {
             found = true;
             break;
@@ -234,7 +403,6 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
       componentKept[index] = found ? 1 : 2;
     }
   }
-  std::vector<std::uint8_t>().swap(centreKept);
 
   thin.assign(static_cast<std::size_t>(voxelCount), 0);
   struct ThinKernel
@@ -250,6 +418,14 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
     void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
     {
       for (std::int64_t v = begin; v < end; ++v)
+      {
+        // One material all around: its centre keeps it, and so does every corner of it (every
+        // voxel around them is one of the 3^d).
+        this->Thin[v] = this->ComponentKept[v] == Uniform ? 0 : this->Test(v);
+      }
+    }
+    std::uint8_t Test(std::int64_t v) const
+    {
       {
         const LatticeIndex<Dim> voxel = (*this->Unlinear)(v, *this->Dimensions);
         const std::int32_t own = (*this->MaterialAt)(voxel);
@@ -285,7 +461,7 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
             joined = joined && shared;
           }
         }
-        this->Thin[v] = kept && joined ? 0 : 1;
+        return kept && joined ? 0 : 1;
       }
     }
   };

@@ -113,6 +113,111 @@ TYPED_TEST(ThinPartsTest, ShapesThatTheLabelsFunctionLosesOrPinches)
   }
 }
 
+/// The definition of a thin voxel (Spacetree/ThinParts.h), tested voxel by voxel with no
+/// shortcut: the reference for the kernels, which answer voxels inside one material from whole
+/// rows.
+template <int D>
+std::vector<std::uint8_t> ThinByDefinition(const LabelImage<D>& image, bool bodyOnly)
+{
+  const stm::LatticeIndex<D>& dims = image.GetDimensions();
+  auto material = [&](const stm::LatticeIndex<D>& voxel) -> int
+  {
+    const int value = image.At(voxel); // the background beyond the image
+    return bodyOnly ? (value == stm::BackgroundMaterial ? 0 : 1) : value;
+  };
+  // The strict majority of the 2^D voxels at a corner, or -1.
+  auto majority = [&](const stm::LatticeIndex<D>& corner)
+  {
+    std::map<int, int> counts;
+    for (int k = 0; k < (1 << D); ++k)
+    {
+      stm::LatticeIndex<D> voxel = corner;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        voxel[axis] -= (k >> axis) & 1;
+      }
+      ++counts[material(voxel)];
+    }
+    int best = -1, bestCount = 0, ties = 0;
+    for (const auto& entry : counts)
+    {
+      ties = entry.second == bestCount ? ties + 1 : entry.second > bestCount ? 0 : ties;
+      if (entry.second > bestCount)
+      {
+        best = entry.first;
+        bestCount = entry.second;
+      }
+    }
+    return ties > 0 ? -1 : best;
+  };
+  // Whether the labels function gives a voxel's material more than one half at its centre.
+  auto centreKeeps = [&](const stm::LatticeIndex<D>& voxel)
+  {
+    int own = 0, total = 0;
+    ForEachIndexInBox<D>(stm::LatticeIndex<D>{}, UniformExtents<D>(3),
+      [&](const stm::LatticeIndex<D>& offset)
+      {
+        stm::LatticeIndex<D> other = voxel;
+        int weight = 1;
+        for (int axis = 0; axis < D; ++axis)
+        {
+          other[axis] += offset[axis] - 1;
+          weight *= offset[axis] == 1 ? 2 : 1;
+        }
+        own += material(other) == material(voxel) ? weight : 0;
+        total += weight;
+      });
+    return 2 * own > total;
+  };
+  LabelImage<D> mapped(dims);
+  ForEachIndex<D>(dims,
+    [&](const stm::LatticeIndex<D>& voxel)
+    { mapped.Set(voxel, static_cast<stm::MaterialIndex>(material(voxel))); });
+  const std::vector<std::int64_t> components = VoxelComponentIds<D>(mapped);
+  std::set<std::int64_t> keptComponents;
+  ForEachIndex<D>(dims,
+    [&](const stm::LatticeIndex<D>& voxel)
+    {
+      if (centreKeeps(voxel))
+      {
+        keptComponents.insert(components[stm::LinearIndex<D>(voxel, dims)]);
+      }
+    });
+  std::vector<std::uint8_t> thin(static_cast<std::size_t>(stm::NumberOfLatticeCells<D>(dims)), 0);
+  ForEachIndex<D>(dims,
+    [&](const stm::LatticeIndex<D>& voxel)
+    {
+      const std::int64_t linear = stm::LinearIndex<D>(voxel, dims);
+      bool joined = true;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        for (const int side : { 0, 1 })
+        {
+          stm::LatticeIndex<D> neighbour = voxel;
+          neighbour[axis] += side == 1 ? 1 : -1;
+          if (!image.Contains(neighbour) || material(neighbour) != material(voxel))
+          {
+            continue;
+          }
+          bool shared = false;
+          for (int k = 0; k < (1 << (D - 1)); ++k)
+          {
+            stm::LatticeIndex<D> corner = voxel;
+            corner[axis] += side;
+            for (int other = 0, bit = 0; other < D; ++other)
+            {
+              corner[other] += other == axis ? 0 : (k >> bit++) & 1;
+            }
+            shared = shared || majority(corner) == material(voxel);
+          }
+          joined = joined && shared;
+        }
+      }
+      thin[linear] = keptComponents.count(components[linear]) != 0 && joined ? 0 : 1;
+    });
+  return thin;
+}
+
 /// The cut mesh: D coordinates per point (voxel units), D + 1 point ids and a label per cell.
 template <int D>
 struct CutLabels
@@ -292,6 +397,25 @@ std::int64_t ComponentsLostByCentres(const LabelImage<D>& image, const CutLabels
   }
   const std::int64_t components = *std::max_element(ids.begin(), ids.end()) + 1;
   return components - static_cast<std::int64_t>(covered.size());
+}
+
+// The kernels give the definition's flags, voxel for voxel, on random images with large regions
+// of one material (the kernels' row comparisons) and specks (their counts), at the border too.
+TYPED_TEST(ThinPartsTest, KernelsFollowTheDefinition)
+{
+  constexpr int D = TypeParam::value;
+  for (const unsigned seed : { 3u, 21u, 77u })
+  {
+    const LabelImage<D> image = MakeRandomImage<D>(FirstExtents<D>({ 23, 19, 17 }), seed, 4, 8, 30);
+    for (const bool bodyOnly : { false, true })
+    {
+      const std::vector<std::uint8_t> thin = Thin<D>(image, bodyOnly);
+      EXPECT_EQ(thin, ThinByDefinition<D>(image, bodyOnly))
+        << "seed " << seed << ", body only " << bodyOnly;
+      EXPECT_GT(Count<D>(thin), 0);
+      EXPECT_LT(Count<D>(thin), static_cast<std::int64_t>(thin.size()) / 2);
+    }
+  }
 }
 
 TYPED_TEST(ThinPartsTest, RefiningThinVoxelsKeepsEveryComponent)
