@@ -173,11 +173,11 @@ struct PieceVertex
   bool IsCut() const { return this->A != this->B; }
 };
 
-/// Puts a piece simplex into the parent's orientation: the sign of the determinant of its
-/// barycentric coordinates (cut vertices at the edge midpoints; the sign holds for any cut
-/// parameters in (0, 1) because the pieces stay non-degenerate). Exact: the entries are 0, 1/2, 1.
+/// The sign of the determinant of a piece simplex's barycentric coordinates (cut vertices at the
+/// edge midpoints; the sign holds for any cut parameters in (0, 1) because the pieces stay
+/// non-degenerate). Exact: the entries are 0, 1/2, 1.
 template <int Dim>
-void OrientLikeParent(PieceVertex* simplex)
+double BarycentricDeterminant(const PieceVertex* simplex)
 {
   constexpr int n = Dim + 1;
   double m[n][n];
@@ -193,8 +193,148 @@ void OrientLikeParent(PieceVertex* simplex)
       m[r][simplex[r].B] += 0.5;
     }
   }
-  const double determinant = Determinant<n>(m);
-  if (determinant < 0)
+  return Determinant<n>(m);
+}
+
+/// The orientation of every piece simplex of a Dim-simplex, Dim <= 3, as a table: a piece vertex
+/// has a code (vertex v: v; the cut vertex of edge {a, b}: Dim + 1 + the edge's index), a piece
+/// the base-Codes number of its vertices' codes, vertex 0 most significant, and Signs the sign
+/// of its barycentric determinant (0: degenerate, never a piece). OrientLikeParent runs once
+/// for every piece of every cut and every option the snapping weighs, so a lookup replaces the
+/// (Dim + 1) x (Dim + 1) determinant (AAL, 116 labels: a seventh of the cut stage).
+template <int Dim>
+struct PieceOrientation
+{
+  static_assert(Dim >= 1 && Dim <= 3, "the orientation table covers dimensions 1 to 3");
+  static constexpr int Vertices = Dim + 1;
+  static constexpr int Codes = Vertices + Dim * (Dim + 1) / 2;
+  static constexpr int Pieces = []
+  {
+    int count = 1;
+    for (int v = 0; v < Vertices; ++v)
+    {
+      count *= Codes;
+    }
+    return count;
+  }();
+
+  static constexpr int CodeOf(int a, int b)
+  {
+    if (a == b)
+    {
+      return a;
+    }
+    const int low = a < b ? a : b, high = a < b ? b : a;
+    int edge = 0;
+    for (int i = 0; i < low; ++i)
+    {
+      edge += Dim - i;
+    }
+    return Vertices + edge + (high - low - 1);
+  }
+
+  /// Codes by the vertex pair (A, B) of a piece vertex.
+  static constexpr std::array<std::array<std::int8_t, Vertices>, Vertices> CodeTable = []
+  {
+    std::array<std::array<std::int8_t, Vertices>, Vertices> table{};
+    for (int a = 0; a < Vertices; ++a)
+    {
+      for (int b = 0; b < Vertices; ++b)
+      {
+        table[a][b] = static_cast<std::int8_t>(CodeOf(a, b));
+      }
+    }
+    return table;
+  }();
+
+  /// The exact determinant of twice the barycentric coordinates (integer entries 0, 1, 2), in
+  /// closed form (a cofactor recursion exceeds the compilers' constexpr budgets in 3D).
+  static constexpr int IntegerDeterminant(const int (&m)[Vertices][Vertices])
+  {
+    if constexpr (Vertices == 2)
+    {
+      return m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    }
+    else if constexpr (Vertices == 3)
+    {
+      return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+        m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+        m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    }
+    else
+    {
+      // Laplace along the first two rows: their 2 x 2 minors times the complementary ones.
+      const int s0 = m[0][0] * m[1][1] - m[1][0] * m[0][1];
+      const int s1 = m[0][0] * m[1][2] - m[1][0] * m[0][2];
+      const int s2 = m[0][0] * m[1][3] - m[1][0] * m[0][3];
+      const int s3 = m[0][1] * m[1][2] - m[1][1] * m[0][2];
+      const int s4 = m[0][1] * m[1][3] - m[1][1] * m[0][3];
+      const int s5 = m[0][2] * m[1][3] - m[1][2] * m[0][3];
+      const int c5 = m[2][2] * m[3][3] - m[3][2] * m[2][3];
+      const int c4 = m[2][1] * m[3][3] - m[3][1] * m[2][3];
+      const int c3 = m[2][1] * m[3][2] - m[3][1] * m[2][2];
+      const int c2 = m[2][0] * m[3][3] - m[3][0] * m[2][3];
+      const int c1 = m[2][0] * m[3][2] - m[3][0] * m[2][2];
+      const int c0 = m[2][0] * m[3][1] - m[3][0] * m[2][1];
+      return s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0;
+    }
+  }
+
+  static constexpr std::array<std::int8_t, Pieces> Signs = []
+  {
+    // The vertex pair of every code.
+    std::array<int, Codes> first{}, second{};
+    for (int a = 0; a < Vertices; ++a)
+    {
+      for (int b = a; b < Vertices; ++b)
+      {
+        first[CodeOf(a, b)] = a;
+        second[CodeOf(a, b)] = b;
+      }
+    }
+    std::array<std::int8_t, Pieces> signs{};
+    for (int piece = 0; piece < Pieces; ++piece)
+    {
+      int m[Vertices][Vertices] = {};
+      for (int r = Vertices - 1, rest = piece; r >= 0; --r, rest /= Codes)
+      {
+        const int code = rest % Codes;
+        m[r][first[code]] += first[code] == second[code] ? 2 : 1;
+        m[r][second[code]] += first[code] == second[code] ? 0 : 1;
+      }
+      const int determinant = IntegerDeterminant(m);
+      signs[piece] = static_cast<std::int8_t>(determinant > 0 ? 1 : determinant < 0 ? -1 : 0);
+    }
+    return signs;
+  }();
+
+  /// The piece's index into Signs.
+  static int IndexOf(const PieceVertex* simplex)
+  {
+    int index = 0;
+    for (int r = 0; r < Vertices; ++r)
+    {
+      index = index * Codes + CodeTable[simplex[r].A][simplex[r].B];
+    }
+    return index;
+  }
+};
+
+/// Puts a piece simplex into the parent's orientation (BarycentricDeterminant's sign), by the
+/// table of PieceOrientation up to 3D.
+template <int Dim>
+void OrientLikeParent(PieceVertex* simplex)
+{
+  bool reversed = false;
+  if constexpr (Dim <= 3)
+  {
+    reversed = PieceOrientation<Dim>::Signs[PieceOrientation<Dim>::IndexOf(simplex)] < 0;
+  }
+  else
+  {
+    reversed = BarycentricDeterminant<Dim>(simplex) < 0;
+  }
+  if (reversed)
   {
     std::swap(simplex[0], simplex[1]);
   }

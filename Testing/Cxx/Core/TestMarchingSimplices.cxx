@@ -240,6 +240,70 @@ std::vector<double> BallFunction(
 }
 
 template <class T>
+class PieceOrientationTest : public ::testing::Test
+{
+};
+using TableDimensions = ::testing::Types<Dim<1>, Dim<2>, Dim<3>>;
+TYPED_TEST_SUITE(PieceOrientationTest, TableDimensions);
+
+// The orientation table holds the sign of the barycentric determinant of every tuple of piece
+// vertices (vertices and edge midpoints, in either order of an edge's ends), and the codes
+// number the vertices and then the edges without a gap.
+TYPED_TEST(PieceOrientationTest, SignsAreTheBarycentricDeterminants)
+{
+  constexpr int D = TypeParam::value;
+  using Table = stm::PieceOrientation<D>;
+  std::vector<stm::PieceVertex> vertices;
+  std::set<int> codes;
+  for (int a = 0; a <= D; ++a)
+  {
+    for (int b = 0; b <= D; ++b)
+    {
+      vertices.push_back({ static_cast<std::int8_t>(a), static_cast<std::int8_t>(b) });
+      EXPECT_EQ(Table::CodeTable[a][b], Table::CodeTable[b][a]);
+      codes.insert(Table::CodeTable[a][b]);
+    }
+  }
+  EXPECT_EQ(static_cast<int>(codes.size()), Table::Codes);
+  EXPECT_EQ(*codes.begin(), 0);
+  EXPECT_EQ(*codes.rbegin(), Table::Codes - 1);
+  const int n = static_cast<int>(vertices.size());
+  int tuples = 1;
+  for (int v = 0; v <= D; ++v)
+  {
+    tuples *= n;
+  }
+  int positive = 0, negative = 0, wrong = 0;
+  for (int t = 0; t < tuples; ++t)
+  {
+    stm::PieceVertex simplex[D + 1];
+    for (int v = D, rest = t; v >= 0; --v, rest /= n)
+    {
+      simplex[v] = vertices[rest % n];
+    }
+    const double determinant = stm::BarycentricDeterminant<D>(simplex);
+    const int expected = determinant > 0.0 ? 1 : determinant < 0.0 ? -1 : 0;
+    const int sign = Table::Signs[Table::IndexOf(simplex)];
+    wrong += sign != expected;
+    positive += expected > 0;
+    negative += expected < 0;
+  }
+  EXPECT_EQ(wrong, 0);
+  // Both orientations occur as often: swapping two rows flips the sign.
+  EXPECT_EQ(positive, negative);
+  EXPECT_GT(positive, 0);
+  // The identity (the parent's own vertices) is positive, two vertices swapped negative.
+  stm::PieceVertex parent[D + 1];
+  for (int v = 0; v <= D; ++v)
+  {
+    parent[v] = { static_cast<std::int8_t>(v), static_cast<std::int8_t>(v) };
+  }
+  EXPECT_EQ(Table::Signs[Table::IndexOf(parent)], 1);
+  std::swap(parent[0], parent[1]);
+  EXPECT_EQ(Table::Signs[Table::IndexOf(parent)], -1);
+}
+
+template <class T>
 class MarchingSimplicesMeshTest : public ::testing::Test
 {
 };
