@@ -6,6 +6,8 @@
 // its facets, for the algorithms that walk a mesh's facets (boundary smoothing, interface
 // extraction).
 
+#include "Execution.h"
+
 #include <algorithm>
 #include <cstdint>
 #include <vector>
@@ -40,6 +42,96 @@ struct PointCells
     {
       this->Cells[next[static_cast<std::int64_t>(connectivity[i])]++] = i / Corners;
     }
+  }
+
+  /// Build with the cells in Chunks fixed ranges, run by the executor: each range counts the
+  /// cells of its points, and then writes them after those of the earlier ranges, so the rows
+  /// are Build's (ascending cells) whatever the number of threads. A point's cells per range
+  /// fit 32 bits (Chunks x numberOfPoints of them while it builds).
+  template <class IdType, class Executor>
+  void Build(const IdType* connectivity, std::int64_t numberOfCells, std::int64_t numberOfPoints,
+    Executor& executor)
+  {
+    constexpr std::int64_t Chunks = 4;
+    // Below this the serial build is faster than the passes and the counts.
+    constexpr std::int64_t SerialCells = 1 << 16;
+    if (numberOfCells < SerialCells)
+    {
+      this->Build(connectivity, numberOfCells, numberOfPoints);
+      return;
+    }
+    const std::int64_t points = numberOfPoints;
+    const std::int64_t chunkCells = (numberOfCells + Chunks - 1) / Chunks;
+    // counts[k * points + p]: the cells of range k at p, then where they start in p's row.
+    std::vector<std::int32_t> counts(static_cast<std::size_t>(Chunks * points), 0);
+    struct CountKernel
+    {
+      using Scratch = NoScratch;
+      const IdType* Connectivity;
+      std::int64_t NumberOfCells;
+      std::int64_t ChunkCells;
+      std::int64_t Points;
+      std::int32_t* Counts;
+      bool Fill;
+      const std::int64_t* Offsets;
+      std::int64_t* Cells;
+      void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+      {
+        for (std::int64_t k = begin; k < end; ++k)
+        {
+          std::int32_t* own = this->Counts + k * this->Points;
+          const std::int64_t first = k * this->ChunkCells;
+          const std::int64_t last = std::min(this->NumberOfCells, first + this->ChunkCells);
+          for (std::int64_t i = first * Corners; i < last * Corners; ++i)
+          {
+            const auto id = static_cast<std::int64_t>(this->Connectivity[i]);
+            if (this->Fill)
+            {
+              this->Cells[this->Offsets[id] + own[id]++] = i / Corners;
+            }
+            else
+            {
+              ++own[id];
+            }
+          }
+        }
+      }
+    };
+    struct StartKernel
+    {
+      using Scratch = NoScratch;
+      std::int64_t Points;
+      std::int32_t* Counts;
+      std::int64_t* Degrees;
+      void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+      {
+        for (std::int64_t p = begin; p < end; ++p)
+        {
+          std::int32_t start = 0;
+          for (std::int64_t k = 0; k < Chunks; ++k)
+          {
+            const std::int32_t count = this->Counts[k * this->Points + p];
+            this->Counts[k * this->Points + p] = start;
+            start += count;
+          }
+          this->Degrees[p + 1] = start;
+        }
+      }
+    };
+    CountKernel count{ connectivity, numberOfCells, chunkCells, points, counts.data(), false,
+      nullptr, nullptr };
+    executor.For(0, Chunks, 1, count);
+    this->Offsets.assign(static_cast<std::size_t>(points) + 1, 0);
+    StartKernel starts{ points, counts.data(), this->Offsets.data() };
+    executor.For(0, points, 1 << 14, starts);
+    for (std::int64_t p = 0; p < points; ++p)
+    {
+      this->Offsets[p + 1] += this->Offsets[p];
+    }
+    this->Cells.assign(static_cast<std::size_t>(numberOfCells * Corners), 0);
+    CountKernel fill{ connectivity, numberOfCells, chunkCells, points, counts.data(), true,
+      this->Offsets.data(), this->Cells.data() };
+    executor.For(0, Chunks, 1, fill);
   }
 
   /// The other cell of the facet of `cell` (point ids `ids`) opposite its corner `corner`, or

@@ -258,7 +258,7 @@ Status CornerFractions(const double* points, std::int64_t numberOfPoints,
   }
   executor.ReportProgress(0.3);
   PointCells<Dim> incidence;
-  incidence.Build(connectivity, numberOfCells, numberOfPoints);
+  incidence.Build(connectivity, numberOfCells, numberOfPoints, executor);
   executor.ReportProgress(0.5);
 
   // Each point's (material, angle) sums, counted then written, in parallel over points.
@@ -672,17 +672,68 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const double* poi
   this->Incidence.assign(static_cast<std::size_t>(numberOfPoints), 0);
   this->LocalIds.assign(static_cast<std::size_t>(numberOfPoints), -1);
   this->Visits.assign(static_cast<std::size_t>(numberOfMaterials), {});
-  std::vector<std::int32_t> later;
   for (std::int64_t cell = 0; cell < numberOfCells; ++cell)
   {
     this->CellParents[cell] = cell;
-    const std::int64_t* ids = this->Cells.data() + cell * (Dim + 1);
-    AdjustIncidence(this->RemainingIncidence, ids, 1);
-    AdjustIncidence(this->Incidence, ids, 1);
-    this->LaterMaterials(ids, -1, later);
-    for (const std::int32_t material : later)
+    AdjustIncidence(this->Incidence, this->Cells.data() + cell * (Dim + 1), 1);
+  }
+  this->RemainingIncidence = this->Incidence;
+  // Each cell visits the steps of the later materials its points carry: gathered over fixed
+  // ranges of cells side by side and joined in range order, so every step's cells ascend
+  // whatever the number of threads.
+  {
+    constexpr std::int64_t Ranges = 16;
+    const std::int64_t rangeCells = (numberOfCells + Ranges - 1) / Ranges;
+    std::vector<std::vector<std::vector<std::int64_t>>> rangeVisits(
+      static_cast<std::size_t>(Ranges));
+    struct VisitKernel
     {
-      this->Visits[material].push_back(cell);
+      struct Scratch
+      {
+        std::vector<std::int32_t> Later;
+      };
+      const MultiMaterialCut* Self;
+      std::int64_t NumberOfCells;
+      std::int64_t RangeCells;
+      std::vector<std::vector<std::int64_t>>* Lists;
+      void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
+      {
+        for (std::int64_t r = begin; r < end; ++r)
+        {
+          std::vector<std::vector<std::int64_t>>& lists = this->Lists[r];
+          lists.resize(static_cast<std::size_t>(this->Self->NumberOfMaterials));
+          const std::int64_t last = std::min(this->NumberOfCells, (r + 1) * this->RangeCells);
+          for (std::int64_t cell = r * this->RangeCells; cell < last; ++cell)
+          {
+            this->Self->LaterMaterials(
+              this->Self->Cells.data() + cell * (Dim + 1), -1, scratch.Later);
+            for (const std::int32_t material : scratch.Later)
+            {
+              lists[material].push_back(cell);
+            }
+          }
+        }
+      }
+    };
+    VisitKernel visits{ this, numberOfCells, rangeCells, rangeVisits.data() };
+    executor.For(0, Ranges, 1, visits);
+    for (std::int32_t material = 0; material < numberOfMaterials; ++material)
+    {
+      std::size_t size = 0;
+      for (const auto& lists : rangeVisits)
+      {
+        size += lists.empty() ? 0 : lists[material].size();
+      }
+      this->Visits[material].reserve(size);
+      for (auto& lists : rangeVisits)
+      {
+        if (!lists.empty())
+        {
+          this->Visits[material].insert(
+            this->Visits[material].end(), lists[material].begin(), lists[material].end());
+          std::vector<std::int64_t>().swap(lists[material]);
+        }
+      }
     }
   }
   // Batches of steps with disjoint points (Batch) run side by side: a step with more than two

@@ -945,7 +945,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   auto sameMaterial = [&](std::int64_t a, std::int64_t b)
   { return !materials || materials[a] == materials[b]; };
 
-  this->Incidence.Build(connectivity, cells, numberOfPoints);
+  this->Incidence.Build(connectivity, cells, numberOfPoints, executor);
   if (executor.ShouldAbort())
   {
     return Status::Aborted();
@@ -1192,35 +1192,72 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   std::vector<std::int64_t>().swap(counts);
   this->ConstrainJunctions(connectivity, materials, surfaceMasks, executor);
 
-  // Interior layers by edge hops from the surface.
-  std::vector<std::int64_t> frontier;
-  for (std::int64_t p = 0; p < numberOfPoints; ++p)
+  // Interior layers by edge hops from the surface: layer k + 1 is the points without a role
+  // that share a cell with a point of layer k (layer 0: the surface points). Each pass looks at
+  // every point's own cells in parallel, reading the hops of the earlier layers only.
   {
-    if (this->Roles[p] == Surface)
+    constexpr std::uint8_t Far = std::numeric_limits<std::uint8_t>::max();
+    std::vector<std::uint8_t> hops(static_cast<std::size_t>(numberOfPoints), Far);
+    std::vector<std::uint8_t> reached(static_cast<std::size_t>(numberOfPoints), 0);
+    for (std::int64_t p = 0; p < numberOfPoints; ++p)
     {
-      frontier.push_back(p);
+      hops[p] = this->Roles[p] == Surface ? 0 : Far;
     }
-  }
-  for (int layer = 0; layer < options.NumberOfInteriorLayers && !frontier.empty(); ++layer)
-  {
-    std::vector<std::int64_t> next;
-    for (const std::int64_t p : frontier)
+    struct LayerKernel
     {
-      for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
+      using Scratch = NoScratch;
+      const BoundarySmoother* Self;
+      const IdType* Connectivity;
+      const std::uint8_t* Hops;
+      std::uint8_t Layer;
+      std::uint8_t* Reached;
+      void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
       {
-        const IdType* ids = connectivity + this->Incidence.Cells[k] * Corners;
-        for (int v = 0; v <= Dim; ++v)
+        const BoundarySmoother& self = *this->Self;
+        for (std::int64_t p = begin; p < end; ++p)
         {
-          const auto id = static_cast<std::int64_t>(ids[v]);
-          if (this->Roles[id] == Other)
+          bool next = false;
+          if (self.Roles[p] == Other && this->Hops[p] == Far)
           {
-            this->Roles[id] = InteriorLayer;
-            next.push_back(id);
+            for (std::int64_t k = self.Incidence.Offsets[p];
+                 k < self.Incidence.Offsets[p + 1] && !next; ++k)
+            {
+              const IdType* ids = this->Connectivity + self.Incidence.Cells[k] * Corners;
+              for (int v = 0; v <= Dim && !next; ++v)
+              {
+                next = this->Hops[static_cast<std::int64_t>(ids[v])] == this->Layer;
+              }
+            }
           }
+          this->Reached[p] = next ? 1 : 0;
         }
       }
+    };
+    const int layers = std::min<int>(options.NumberOfInteriorLayers, Far - 1);
+    for (int layer = 0; layer < layers; ++layer)
+    {
+      LayerKernel kernel{ this, connectivity, hops.data(), static_cast<std::uint8_t>(layer),
+        reached.data() };
+      executor.For(0, numberOfPoints, 1 << 12, kernel);
+      std::int64_t added = 0;
+      for (std::int64_t p = 0; p < numberOfPoints; ++p)
+      {
+        if (reached[p])
+        {
+          hops[p] = static_cast<std::uint8_t>(layer + 1);
+          this->Roles[p] = InteriorLayer;
+          ++added;
+        }
+      }
+      if (added == 0)
+      {
+        break;
+      }
     }
-    frontier.swap(next);
+  }
+  if (executor.ShouldAbort())
+  {
+    return Status::Aborted();
   }
 
   // Edge neighbours of the interior-layer points (their Laplacian targets), sorted by id, once:

@@ -78,7 +78,7 @@ Status ExtractInterfaceFacets(const double* points, std::int64_t numberOfPoints,
     }
   }
   PointCells<Dim> incidence;
-  incidence.Build(connectivity, numberOfCells, numberOfPoints);
+  incidence.Build(connectivity, numberOfCells, numberOfPoints, executor);
   if (executor.ShouldAbort())
   {
     return Status::Aborted();

@@ -2,7 +2,8 @@
 // PointCells: ForEachFacetAt, over every point with smallestOnly, visits each facet of the mesh
 // once with the cells that FacetNeighbour pairs, and without it once from each of the facet's
 // points, on Kuhn triangulations of cube grids (2D, 3D and 4D: conforming, with outer-boundary
-// facets), a chain of segments (1D) and a non-manifold fan (three triangles on one edge).
+// facets), a chain of segments (1D) and a non-manifold fan (three triangles on one edge); and
+// the parallel Build gives the serial rows.
 
 #include "Common/PointCells.h"
 
@@ -155,6 +156,66 @@ TEST(PointCells, EachFacetOnceFromItsSmallestPoint)
       }
     });
   EXPECT_EQ(shared, (std::vector<std::int64_t>{ 0, 1, 2 }));
+}
+
+/// The parallel Build gives the serial one's rows, on any number of threads, for a mesh large
+/// enough for its ranges (a shuffled cell order, so rows hold cells of every range).
+template <int Dim>
+void CheckParallelBuild(int n)
+{
+  constexpr int Corners = Dim + 1;
+  std::int64_t points = 0;
+  std::vector<std::int64_t> grid = KuhnGrid<Dim>(n, points);
+  const auto cells = static_cast<std::int64_t>(grid.size()) / Corners;
+  ASSERT_GE(cells, 1 << 16) << "below the serial threshold";
+  std::vector<std::int64_t> order(static_cast<std::size_t>(cells));
+  std::iota(order.begin(), order.end(), 0);
+  std::uint64_t state = 12345;
+  for (std::int64_t i = cells - 1; i > 0; --i)
+  {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    std::swap(order[i], order[static_cast<std::int64_t>((state >> 33) % (i + 1))]);
+  }
+  std::vector<std::int32_t> shuffled(grid.size());
+  for (std::int64_t c = 0; c < cells; ++c)
+  {
+    for (int v = 0; v < Corners; ++v)
+    {
+      shuffled[c * Corners + v] = static_cast<std::int32_t>(grid[order[c] * Corners + v]);
+    }
+  }
+  stm::PointCells<Dim> serial;
+  serial.Build(shuffled.data(), cells, points);
+  ASSERT_EQ(serial.Offsets.back(), cells * Corners);
+  for (const int threads : { 1, 2, 3 })
+  {
+    stm::ThreadPoolExecutor executor(threads);
+    stm::PointCells<Dim> parallel;
+    parallel.Build(shuffled.data(), cells, points, executor);
+    EXPECT_EQ(parallel.Offsets, serial.Offsets) << threads << " threads";
+    EXPECT_EQ(parallel.Cells, serial.Cells) << threads << " threads";
+  }
+  // Each row ascends and holds exactly the cells with that point.
+  std::vector<std::int64_t> seen(static_cast<std::size_t>(points), 0);
+  for (std::int64_t p = 0; p < points; ++p)
+  {
+    for (std::int64_t k = serial.Offsets[p]; k < serial.Offsets[p + 1]; ++k)
+    {
+      const std::int64_t cell = serial.Cells[k];
+      ASSERT_TRUE(k == serial.Offsets[p] || serial.Cells[k - 1] < cell);
+      const std::int32_t* ids = shuffled.data() + cell * Corners;
+      ASSERT_NE(std::find(ids, ids + Corners, p), ids + Corners);
+      ++seen[p];
+    }
+  }
+  EXPECT_EQ(std::accumulate(seen.begin(), seen.end(), std::int64_t{ 0 }), cells * Corners);
+}
+
+TEST(PointCells, ParallelBuildGivesTheSerialRows)
+{
+  CheckParallelBuild<2>(190); // 72,200 triangles
+  CheckParallelBuild<3>(23);  // 73,002 tetrahedra
+  CheckParallelBuild<4>(8);   // 98,304 4-simplices
 }
 
 } // namespace
