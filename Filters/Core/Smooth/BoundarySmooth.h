@@ -1193,66 +1193,76 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   this->ConstrainJunctions(connectivity, materials, surfaceMasks, executor);
 
   // Interior layers by edge hops from the surface: layer k + 1 is the points without a role
-  // that share a cell with a point of layer k (layer 0: the surface points). Each pass looks at
-  // every point's own cells in parallel, reading the hops of the earlier layers only.
+  // that share a cell with a point of layer k (layer 0: the surface points). Each layer's points
+  // gather their candidates in parallel, over chunks of the layer, reading the roles only; the
+  // candidates are then taken in chunk order, each once.
   {
-    constexpr std::uint8_t Far = std::numeric_limits<std::uint8_t>::max();
-    std::vector<std::uint8_t> hops(static_cast<std::size_t>(numberOfPoints), Far);
-    std::vector<std::uint8_t> reached(static_cast<std::size_t>(numberOfPoints), 0);
+    std::vector<std::int64_t> frontier;
     for (std::int64_t p = 0; p < numberOfPoints; ++p)
     {
-      hops[p] = this->Roles[p] == Surface ? 0 : Far;
+      if (this->Roles[p] == Surface)
+      {
+        frontier.push_back(p);
+      }
     }
+    constexpr std::int64_t LayerChunk = 4096;
     struct LayerKernel
     {
       using Scratch = NoScratch;
       const BoundarySmoother* Self;
       const IdType* Connectivity;
-      const std::uint8_t* Hops;
-      std::uint8_t Layer;
-      std::uint8_t* Reached;
+      const std::vector<std::int64_t>* Frontier;
+      std::vector<std::int64_t>* Candidates; // per chunk of the frontier
       void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
       {
         const BoundarySmoother& self = *this->Self;
-        for (std::int64_t p = begin; p < end; ++p)
+        const auto size = static_cast<std::int64_t>(this->Frontier->size());
+        for (std::int64_t chunk = begin; chunk < end; ++chunk)
         {
-          bool next = false;
-          if (self.Roles[p] == Other && this->Hops[p] == Far)
+          std::vector<std::int64_t>& candidates = this->Candidates[chunk];
+          candidates.clear();
+          const std::int64_t last = std::min(size, (chunk + 1) * LayerChunk);
+          for (std::int64_t i = chunk * LayerChunk; i < last; ++i)
           {
-            for (std::int64_t k = self.Incidence.Offsets[p];
-                 k < self.Incidence.Offsets[p + 1] && !next; ++k)
+            const std::int64_t p = (*this->Frontier)[i];
+            for (std::int64_t k = self.Incidence.Offsets[p]; k < self.Incidence.Offsets[p + 1]; ++k)
             {
               const IdType* ids = this->Connectivity + self.Incidence.Cells[k] * Corners;
-              for (int v = 0; v <= Dim && !next; ++v)
+              for (int v = 0; v <= Dim; ++v)
               {
-                next = this->Hops[static_cast<std::int64_t>(ids[v])] == this->Layer;
+                const auto id = static_cast<std::int64_t>(ids[v]);
+                if (self.Roles[id] == Other)
+                {
+                  candidates.push_back(id);
+                }
               }
             }
           }
-          this->Reached[p] = next ? 1 : 0;
         }
       }
     };
-    const int layers = std::min<int>(options.NumberOfInteriorLayers, Far - 1);
-    for (int layer = 0; layer < layers; ++layer)
+    std::vector<std::vector<std::int64_t>> candidates;
+    for (int layer = 0; layer < options.NumberOfInteriorLayers && !frontier.empty(); ++layer)
     {
-      LayerKernel kernel{ this, connectivity, hops.data(), static_cast<std::uint8_t>(layer),
-        reached.data() };
-      executor.For(0, numberOfPoints, 1 << 12, kernel);
-      std::int64_t added = 0;
-      for (std::int64_t p = 0; p < numberOfPoints; ++p)
+      const std::int64_t chunks =
+        (static_cast<std::int64_t>(frontier.size()) + LayerChunk - 1) / LayerChunk;
+      candidates.resize(static_cast<std::size_t>(
+        std::max<std::int64_t>(chunks, static_cast<std::int64_t>(candidates.size()))));
+      LayerKernel kernel{ this, connectivity, &frontier, candidates.data() };
+      executor.For(0, chunks, 1, kernel);
+      std::vector<std::int64_t> next;
+      for (std::int64_t chunk = 0; chunk < chunks; ++chunk)
       {
-        if (reached[p])
+        for (const std::int64_t id : candidates[chunk])
         {
-          hops[p] = static_cast<std::uint8_t>(layer + 1);
-          this->Roles[p] = InteriorLayer;
-          ++added;
+          if (this->Roles[id] == Other)
+          {
+            this->Roles[id] = InteriorLayer;
+            next.push_back(id);
+          }
         }
       }
-      if (added == 0)
-      {
-        break;
-      }
+      frontier.swap(next);
     }
   }
   if (executor.ShouldAbort())
