@@ -247,62 +247,33 @@ struct PieceOrientation
     return table;
   }();
 
-  /// The exact determinant of twice the barycentric coordinates (integer entries 0, 1, 2), in
-  /// closed form (a cofactor recursion exceeds the compilers' constexpr budgets in 3D).
-  static constexpr int IntegerDeterminant(const int (&m)[Vertices][Vertices])
-  {
-    if constexpr (Vertices == 2)
-    {
-      return m[0][0] * m[1][1] - m[0][1] * m[1][0];
-    }
-    else if constexpr (Vertices == 3)
-    {
-      return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-        m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-        m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    }
-    else
-    {
-      // Laplace along the first two rows: their 2 x 2 minors times the complementary ones.
-      const int s0 = m[0][0] * m[1][1] - m[1][0] * m[0][1];
-      const int s1 = m[0][0] * m[1][2] - m[1][0] * m[0][2];
-      const int s2 = m[0][0] * m[1][3] - m[1][0] * m[0][3];
-      const int s3 = m[0][1] * m[1][2] - m[1][1] * m[0][2];
-      const int s4 = m[0][1] * m[1][3] - m[1][1] * m[0][3];
-      const int s5 = m[0][2] * m[1][3] - m[1][2] * m[0][3];
-      const int c5 = m[2][2] * m[3][3] - m[3][2] * m[2][3];
-      const int c4 = m[2][1] * m[3][3] - m[3][1] * m[2][3];
-      const int c3 = m[2][1] * m[3][2] - m[3][1] * m[2][2];
-      const int c2 = m[2][0] * m[3][3] - m[3][0] * m[2][3];
-      const int c1 = m[2][0] * m[3][2] - m[3][0] * m[2][2];
-      const int c0 = m[2][0] * m[3][1] - m[3][0] * m[2][1];
-      return s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0;
-    }
-  }
-
+  // Each piece vertex at twice its barycentric coordinates in the parent, vertex 0 dropped
+  // (vertex v: 2 e_v, the cut vertex of edge {a, b}: e_a + e_b, e_0 = 0): the edge vectors'
+  // determinant then has the sign of the barycentric one (its rows sum to 2).
   static constexpr std::array<std::int8_t, Pieces> Signs = []
   {
-    // The vertex pair of every code.
-    std::array<int, Codes> first{}, second{};
+    std::int64_t places[Codes][Dim] = {};
     for (int a = 0; a < Vertices; ++a)
     {
       for (int b = a; b < Vertices; ++b)
       {
-        first[CodeOf(a, b)] = a;
-        second[CodeOf(a, b)] = b;
+        std::int64_t* place = places[CodeOf(a, b)];
+        place[a == 0 ? 0 : a - 1] += a == 0 ? 0 : 1;
+        place[b == 0 ? 0 : b - 1] += b == 0 ? 0 : 1;
       }
     }
     std::array<std::int8_t, Pieces> signs{};
     for (int piece = 0; piece < Pieces; ++piece)
     {
-      int m[Vertices][Vertices] = {};
+      std::int64_t simplex[Vertices][Dim] = {};
       for (int r = Vertices - 1, rest = piece; r >= 0; --r, rest /= Codes)
       {
-        const int code = rest % Codes;
-        m[r][first[code]] += first[code] == second[code] ? 2 : 1;
-        m[r][second[code]] += first[code] == second[code] ? 0 : 1;
+        for (int c = 0; c < Dim; ++c)
+        {
+          simplex[r][c] = places[rest % Codes][c];
+        }
       }
-      const int determinant = IntegerDeterminant(m);
+      const std::int64_t determinant = SimplexDeterminant<Dim>(simplex);
       signs[piece] = static_cast<std::int8_t>(determinant > 0 ? 1 : determinant < 0 ? -1 : 0);
     }
     return signs;

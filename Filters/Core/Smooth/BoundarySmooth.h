@@ -1246,8 +1246,10 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     {
       const std::int64_t chunks =
         (static_cast<std::int64_t>(frontier.size()) + LayerChunk - 1) / LayerChunk;
-      candidates.resize(static_cast<std::size_t>(
-        std::max<std::int64_t>(chunks, static_cast<std::int64_t>(candidates.size()))));
+      if (static_cast<std::int64_t>(candidates.size()) < chunks)
+      {
+        candidates.resize(static_cast<std::size_t>(chunks));
+      }
       LayerKernel kernel{ this, connectivity, &frontier, candidates.data() };
       executor.For(0, chunks, 1, kernel);
       std::vector<std::int64_t> next;

@@ -35,6 +35,7 @@
 // depend on the number of threads. Simplices are emitted leaf by leaf in leaf order.
 
 #include "../Common/CubeInfo.h"
+#include "../Common/Determinant.h"
 #include "../Common/Execution.h"
 #include "../Common/LatticeBitset.h"
 #include "../Common/Status.h"
@@ -118,67 +119,6 @@ struct TessellationCells
   }
   std::size_t Size() const { return this->Shapes.size(); }
 };
-
-/// Exact orientation of a simplex given by Dim+1 integer points: the sign of the determinant of
-/// the edge vectors from the first point.
-template <int Dim>
-std::int64_t SimplexDeterminant(const LatticeIndex<Dim>* points)
-{
-  std::array<std::array<std::int64_t, Dim>, Dim> m;
-  for (int row = 0; row < Dim; ++row)
-  {
-    for (int col = 0; col < Dim; ++col)
-    {
-      m[row][col] = points[row + 1][col] - points[0][col];
-    }
-  }
-  if constexpr (Dim == 1)
-  {
-    return m[0][0];
-  }
-  else if constexpr (Dim == 2)
-  {
-    return m[0][0] * m[1][1] - m[0][1] * m[1][0];
-  }
-  else if constexpr (Dim == 3)
-  {
-    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-      m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-      m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-  }
-  else
-  {
-    // Bareiss fraction-free elimination: exact for integer matrices.
-    std::int64_t sign = 1;
-    std::int64_t previous = 1;
-    for (int k = 0; k < Dim - 1; ++k)
-    {
-      if (m[k][k] == 0)
-      {
-        int swap = k + 1;
-        while (swap < Dim && m[swap][k] == 0)
-        {
-          ++swap;
-        }
-        if (swap == Dim)
-        {
-          return 0;
-        }
-        std::swap(m[k], m[swap]);
-        sign = -sign;
-      }
-      for (int i = k + 1; i < Dim; ++i)
-      {
-        for (int j = k + 1; j < Dim; ++j)
-        {
-          m[i][j] = (m[i][j] * m[k][k] - m[i][k] * m[k][j]) / previous;
-        }
-      }
-      previous = m[k][k];
-    }
-    return sign * m[Dim - 1][Dim - 1];
-  }
-}
 
 /// Orientation of a cell of shape j (see CellPointCount): the determinant of the simplex of
 /// cube corners 0, 1, 2, 4, ..., 2^(j-1) followed by the apexes. For a simplex it has the sign
