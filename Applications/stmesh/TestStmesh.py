@@ -82,6 +82,7 @@ class Context:
         # The tests choose these themselves.
         env.pop("VTK_SMP_BACKEND_IN_USE", None)
         env.pop("VTK_SMP_MAX_THREADS", None)
+        env.pop("GLIBC_TUNABLES", None)
         env.update(env_changes or {})
         completed = subprocess.run([self.stmesh] + arguments, capture_output=True, text=True,
                                    env=env, cwd=cwd or self.work, timeout=280)
@@ -383,7 +384,9 @@ def case_threads_and_environment(c):
             ("two", ["--threads", "2"], {}),
             ("env_max", [], {"VTK_SMP_MAX_THREADS": "1"}),
             ("env_backend", [], {"VTK_SMP_BACKEND_IN_USE": "Sequential"}),
-            ("default", [], {})]:
+            ("default", [], {}),
+            ("glibc_defaults", [], {"GLIBC_TUNABLES": ""}),
+            ("own_tunables", [], {"GLIBC_TUNABLES": "glibc.malloc.tcache_count=0"})]:
         output, summary_path = c.path(label + ".vtu"), c.path(label + ".json")
         c.run_ok([image, "-o", output, "--summary", summary_path] + arguments, env_changes=env)
         results[label] = (load_summary(summary_path), c.read_back(output))
@@ -393,6 +396,13 @@ def case_threads_and_environment(c):
     check(results["env_backend"][0]["smp_backend"] == "Sequential",
           "VTK_SMP_BACKEND_IN_USE not honoured")
     check(results["default"][0]["smp_backend"] == "STDThread", "STDThread not the default")
+    check(results["default"][0]["malloc_tunables"] ==
+          "glibc.malloc.hugetlb=1:glibc.malloc.mmap_threshold=33554432:glibc.malloc.top_pad=67108864",
+          "the default malloc tunables: %s" % results["default"][0]["malloc_tunables"])
+    check(results["glibc_defaults"][0]["malloc_tunables"] == "",
+          "an empty GLIBC_TUNABLES not kept")
+    check(results["own_tunables"][0]["malloc_tunables"] == "glibc.malloc.tcache_count=0",
+          "the user's GLIBC_TUNABLES not kept")
     check(results["default"][0]["threads"] == os.cpu_count(),
           "default threads %d, cores %d" % (results["default"][0]["threads"], os.cpu_count()))
     meshes = [mesh for _, mesh in results.values()]

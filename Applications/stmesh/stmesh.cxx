@@ -31,6 +31,7 @@
 #include "stmSpacetreeBalance.h"
 #include "stmSpacetreeTessellate.h"
 #include "stmVertexSnap.h"
+#include "stmeshMallocTunables.h"
 
 #include "vtkAlgorithm.h"
 #include "vtkAlgorithmOutput.h"
@@ -299,6 +300,11 @@ Arguments:
                         after the smoothing, on the smoothed mesh.
   --threads N           number of threads, 1 to 4096. Default: all cores, or VTK_SMP_MAX_THREADS.
                         The STDThread backend is used unless VTK_SMP_BACKEND_IN_USE is set.
+                        Unless GLIBC_TUNABLES is set (set it empty for glibc's defaults),
+                        stmesh starts itself again with it set to
+                        glibc.malloc.hugetlb=1:glibc.malloc.mmap_threshold=33554432:
+                        glibc.malloc.top_pad=67108864 (transparent huge pages; about 100 times
+                        fewer page faults, the 116-label atlas about a quarter faster).
   --summary FILE.json   also write the per-stage figures (for tessellate also the inserted
                         points, the cells per type, the boundary layers and, for hybrid and
                         leaves output, the volume fraction of the hexahedra; for snap the
@@ -3430,6 +3436,7 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
        << "},\n";
   json << "  \"threads\": " << summary.Threads.Threads << ",\n";
   json << "  \"smp_backend\": " << JsonString(summary.Threads.Backend) << ",\n";
+  json << "  \"malloc_tunables\": " << JsonString(stmesh::MallocTunablesInEffect()) << ",\n";
   // The spacetree's levels: cell edges in voxels per level, root first, along the image axes the
   // spacetree spans; fractional below the voxel (voxel_subdivision lattice units per voxel).
   const LevelTable& levels = summary.Levels;
@@ -5053,6 +5060,7 @@ void PrintErrorLines(const std::string& message)
 
 int main(int argc, char* argv[])
 {
+  stmesh::RestartWithMallocTunables(argv);
   try
   {
     Diagnostics(); // bind it to the real stderr before anything captures std::cerr
