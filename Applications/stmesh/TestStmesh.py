@@ -434,6 +434,11 @@ def case_summary_json(c):
         for key in ["name", "seconds", "cells", "points", "leaves", "peak_rss_mib"]:
             check(key in entry, "stage %s lacks %s" % (entry.get("name"), key))
         check(entry["peak_rss_mib"] > 0, "no peak memory for %s" % entry["name"])
+        faults = entry["minor_page_faults"]
+        check(faults is None if entry["skipped"] else isinstance(faults, int) and faults >= 0,
+              "bad minor_page_faults %s for %s" % (faults, entry["name"]))
+    check(sum(e["minor_page_faults"] or 0 for e in summary["stages"]) > 0,
+          "the stages report no page faults")
     check(summary["total_seconds"] >= sum(e["seconds"] for e in summary["stages"]) * 0.99,
           "total shorter than the stages")
     check(sorted(summary["tetrahedra_per_material"]) == ["2", "7"], "bad materials")

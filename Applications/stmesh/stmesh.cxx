@@ -305,13 +305,13 @@ Arguments:
                         glibc.malloc.hugetlb=1:glibc.malloc.mmap_threshold=33554432:
                         glibc.malloc.top_pad=67108864 (transparent huge pages; about 100 times
                         fewer page faults, the 116-label atlas about a quarter faster).
-  --summary FILE.json   also write the per-stage figures (for tessellate also the inserted
-                        points, the cells per type, the boundary layers and, for hybrid and
-                        leaves output, the volume fraction of the hexahedra; for snap the
-                        snapped points and the refused snaps; for cut the split cells, the cut
-                        points and the inside and outside cells; for smooth the moved points,
-                        the rejected moves, the quality improvement moves and the split
-                        interior edges), the
+  --summary FILE.json   also write the per-stage figures (seconds, peak memory and minor page
+                        faults; for tessellate also the inserted points, the cells per type,
+                        the boundary layers and, for hybrid and leaves output, the volume
+                        fraction of the hexahedra; for snap the snapped points and the refused
+                        snaps; for cut the split cells, the cut points and the inside and
+                        outside cells; for smooth the moved points, the rejected moves, the
+                        quality improvement moves and the split interior edges), the
                         spacetree's cell size per level (in voxels) and the per-material counts
                         as JSON.
   --compressor C        compression of .vtu and .vtp files: lz4 (the default, fastest), zlib
@@ -1925,7 +1925,8 @@ struct StageReport
   long long Points = -1;
   long long FileBytes = -1;
   double PeakRssMiB = 0.0;
-  std::string Description; // the table's "output" column
+  long long MinorFaultsAtEnd = -1; // the process's minor page faults when the stage ended
+  std::string Description;         // the table's "output" column
   // The tessellate stage only (Tessellation true): the points stmSpacetreeTessellate added to the
   // leaf corners, the cells per type name, and for hybrid and leaves output the share of the
   // mesh volume (area in 2D) in hexahedra (quads); -1 where not computed.
@@ -1968,6 +1969,24 @@ double PeakRssMiB()
     return 0.0;
   }
   return static_cast<double>(usage.ru_maxrss) / 1024.0; // Linux reports KiB
+}
+
+/// The minor page faults of the process so far (pages mapped in without reading a file); -1 if
+/// the system does not say.
+long long MinorPageFaults()
+{
+  struct rusage usage;
+  if (getrusage(RUSAGE_SELF, &usage) != 0)
+  {
+    return -1;
+  }
+  return static_cast<long long>(usage.ru_minflt);
+}
+
+void RecordResources(StageReport& report)
+{
+  report.PeakRssMiB = PeakRssMiB();
+  report.MinorFaultsAtEnd = MinorPageFaults();
 }
 
 using Clock = std::chrono::steady_clock;
@@ -2212,7 +2231,7 @@ vtkSmartPointer<vtkImageData> ReadImage(
   vtkSmartPointer<vtkImageData> copy = vtkSmartPointer<vtkImageData>::New();
   copy->ShallowCopy(image);
   report.Points = static_cast<long long>(image->GetNumberOfPoints());
-  report.PeakRssMiB = PeakRssMiB();
+  RecordResources(report);
   std::ostringstream description;
   description << info.Dimensions[0] << " x " << info.Dimensions[1] << " x " << info.Dimensions[2]
               << " voxels, " << info.ScalarType;
@@ -2376,7 +2395,7 @@ vtkSmartPointer<vtkPointSet> RunFilter(
   filter->SetInputDataObject(0, nullptr);
   report.Cells = static_cast<long long>(copy->GetNumberOfCells());
   report.Points = static_cast<long long>(copy->GetNumberOfPoints());
-  report.PeakRssMiB = PeakRssMiB();
+  RecordResources(report);
   return copy;
 }
 
@@ -2400,7 +2419,7 @@ vtkSmartPointer<vtkUnstructuredGrid> RunStage(vtkAlgorithm* filter, vtkDataObjec
     description << report.Cells << " cells, " << report.Points << " points";
   }
   report.Description = description.str();
-  report.PeakRssMiB = PeakRssMiB();
+  RecordResources(report);
   return copy;
 }
 
@@ -2788,7 +2807,7 @@ void WriteMesh(vtkPointSet* mesh, const std::string& path, MeshFormat format,
   }
   temporary.Commit();
   report.Seconds = SecondsSince(start);
-  report.PeakRssMiB = PeakRssMiB();
+  RecordResources(report);
   std::ostringstream description;
   description << std::fixed << std::setprecision(1)
               << static_cast<double>(report.FileBytes) / (1024.0 * 1024.0) << " MiB "
@@ -3370,6 +3389,7 @@ struct RunSummary
   ImageInfo Image;
   ThreadSetup Threads;
   std::vector<StageReport> Stages;
+  long long MinorFaultsAtStart = -1; // when the run began, after the libraries were loaded
   double TotalSeconds = 0.0;
   std::string MaterialKey;
   std::map<long long, long long> CellsPerMaterial;
@@ -3465,16 +3485,24 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
     json << "null,\n";
   }
   json << "  \"stages\": [\n";
+  long long faultsBefore = summary.MinorFaultsAtStart;
   for (std::size_t i = 0; i < summary.Stages.size(); ++i)
   {
     const StageReport& stage = summary.Stages[i];
+    const bool faultsKnown = stage.MinorFaultsAtEnd >= 0 && faultsBefore >= 0;
     json << "    {\"name\": " << JsonString(stage.Name)
          << ", \"skipped\": " << (stage.Skipped ? "true" : "false")
          << ", \"seconds\": " << std::setprecision(6) << stage.Seconds
          << ", \"cells\": " << JsonCount(stage.Cells) << ", \"points\": " << JsonCount(stage.Points)
          << ", \"leaves\": " << JsonCount(stage.Leaves)
          << ", \"file_bytes\": " << JsonCount(stage.FileBytes)
-         << ", \"peak_rss_mib\": " << std::setprecision(3) << stage.PeakRssMiB;
+         << ", \"peak_rss_mib\": " << std::setprecision(3) << stage.PeakRssMiB
+         << ", \"minor_page_faults\": "
+         << JsonCount(faultsKnown ? stage.MinorFaultsAtEnd - faultsBefore : -1);
+    if (stage.MinorFaultsAtEnd >= 0)
+    {
+      faultsBefore = stage.MinorFaultsAtEnd;
+    }
     if (stage.ThinVoxels >= 0)
     {
       json << ", \"thin_voxels\": " << stage.ThinVoxels;
@@ -4763,6 +4791,7 @@ void PrintStructureReport(const StructureReport& report)
 int Run(const Options& options)
 {
   RunSummary summary;
+  summary.MinorFaultsAtStart = MinorPageFaults();
   std::string input = options.Input;
   if (input.empty())
   {
