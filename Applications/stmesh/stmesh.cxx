@@ -1961,32 +1961,37 @@ struct StageReport
   long long SurfaceCells = -1;
 };
 
-double PeakRssMiB()
+/// The process's peak resident memory and its minor page faults so far (pages mapped in without
+/// reading a file); 0 and -1 if the system does not say.
+struct ResourceUsage
+{
+  double PeakRssMiB = 0.0;
+  long long MinorPageFaults = -1;
+};
+
+ResourceUsage CurrentResourceUsage()
 {
   struct rusage usage;
   if (getrusage(RUSAGE_SELF, &usage) != 0)
   {
-    return 0.0;
+    return {};
   }
-  return static_cast<double>(usage.ru_maxrss) / 1024.0; // Linux reports KiB
+  ResourceUsage current;
+  current.PeakRssMiB = static_cast<double>(usage.ru_maxrss) / 1024.0; // Linux reports KiB
+  current.MinorPageFaults = static_cast<long long>(usage.ru_minflt);
+  return current;
 }
 
-/// The minor page faults of the process so far (pages mapped in without reading a file); -1 if
-/// the system does not say.
-long long MinorPageFaults()
+double PeakRssMiB()
 {
-  struct rusage usage;
-  if (getrusage(RUSAGE_SELF, &usage) != 0)
-  {
-    return -1;
-  }
-  return static_cast<long long>(usage.ru_minflt);
+  return CurrentResourceUsage().PeakRssMiB;
 }
 
 void RecordResources(StageReport& report)
 {
-  report.PeakRssMiB = PeakRssMiB();
-  report.MinorFaultsAtEnd = MinorPageFaults();
+  const ResourceUsage usage = CurrentResourceUsage();
+  report.PeakRssMiB = usage.PeakRssMiB;
+  report.MinorFaultsAtEnd = usage.MinorPageFaults;
 }
 
 using Clock = std::chrono::steady_clock;
@@ -4791,7 +4796,7 @@ void PrintStructureReport(const StructureReport& report)
 int Run(const Options& options)
 {
   RunSummary summary;
-  summary.MinorFaultsAtStart = MinorPageFaults();
+  summary.MinorFaultsAtStart = CurrentResourceUsage().MinorPageFaults;
   std::string input = options.Input;
   if (input.empty())
   {

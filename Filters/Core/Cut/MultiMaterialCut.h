@@ -668,7 +668,6 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const double* poi
   }
   this->CellMaterials.assign(static_cast<std::size_t>(numberOfCells), Remaining);
   this->CellParents.resize(static_cast<std::size_t>(numberOfCells));
-  this->RemainingIncidence.assign(static_cast<std::size_t>(numberOfPoints), 0);
   this->Incidence.assign(static_cast<std::size_t>(numberOfPoints), 0);
   this->LocalIds.assign(static_cast<std::size_t>(numberOfPoints), -1);
   this->Visits.assign(static_cast<std::size_t>(numberOfMaterials), {});
