@@ -20,6 +20,7 @@
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
 #include "vtkPoints.h"
+#include "vtkSMPThreadLocal.h"
 #include "vtkSMPTools.h"
 #include "vtkTypeInt32Array.h"
 #include "vtkTypeInt64Array.h"
@@ -35,15 +36,36 @@ vtkStandardNewMacro(stmMultiMaterialCut);
 
 namespace
 {
-/// The materials in peeling order: the labels ascending, the background last.
-std::vector<std::int64_t> PeelingOrder(std::vector<std::int64_t> labels, std::int64_t background)
+/// The materials in peeling order: the distinct labels of the cell array ascending, the
+/// background last. Each thread keeps a sorted list of the labels it met (label images have
+/// few), instead of a sort of every cell's label.
+std::vector<std::int64_t> PeelingOrder(vtkDataArray* labels, std::int64_t background)
 {
-  labels.push_back(background);
-  std::sort(labels.begin(), labels.end());
-  labels.erase(std::unique(labels.begin(), labels.end()), labels.end());
-  labels.erase(std::find(labels.begin(), labels.end(), background));
-  labels.push_back(background);
-  return labels;
+  vtkSMPThreadLocal<std::vector<std::int64_t>> found;
+  vtkSMPTools::For(0, labels->GetNumberOfTuples(),
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      std::vector<std::int64_t>& mine = found.Local();
+      for (vtkIdType c = begin; c < end; ++c)
+      {
+        const auto label = static_cast<std::int64_t>(labels->GetComponent(c, 0));
+        const auto at = std::lower_bound(mine.begin(), mine.end(), label);
+        if (at == mine.end() || *at != label)
+        {
+          mine.insert(at, label);
+        }
+      }
+    });
+  std::vector<std::int64_t> order{ background };
+  for (const std::vector<std::int64_t>& mine : found)
+  {
+    order.insert(order.end(), mine.begin(), mine.end());
+  }
+  std::sort(order.begin(), order.end());
+  order.erase(std::unique(order.begin(), order.end()), order.end());
+  order.erase(std::find(order.begin(), order.end(), background));
+  order.push_back(background);
+  return order;
 }
 
 struct CutResult
@@ -57,9 +79,8 @@ struct CutResult
 
 template <int Dim, class IdType>
 stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const IdType* connectivity,
-  const std::vector<std::int64_t>& labels, const std::vector<std::int64_t>& order,
-  const stmPlaneFrame& frame, const stm::MultiMaterialCutOptions& options,
-  vtkUnstructuredGrid* output, CutResult& result)
+  vtkDataArray* labels, const std::vector<std::int64_t>& order, const stmPlaneFrame& frame,
+  const stm::MultiMaterialCutOptions& options, vtkUnstructuredGrid* output, CutResult& result)
 {
   const vtkIdType numberOfPoints = input->GetNumberOfPoints();
   const vtkIdType numberOfCells = input->GetNumberOfCells();
@@ -69,11 +90,11 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
     {
       for (vtkIdType c = begin; c < end; ++c)
       {
+        const auto label = static_cast<std::int64_t>(labels->GetComponent(c, 0));
         materials[c] = static_cast<std::int32_t>(
-          std::lower_bound(order.begin(), order.end() - 1, labels[c]) - order.begin());
-        materials[c] = order[materials[c]] == labels[c]
-          ? materials[c]
-          : static_cast<std::int32_t>(order.size()) - 1;
+          std::lower_bound(order.begin(), order.end() - 1, label) - order.begin());
+        materials[c] =
+          order[materials[c]] == label ? materials[c] : static_cast<std::int32_t>(order.size()) - 1;
       }
     });
   std::vector<double> xyz(static_cast<std::size_t>(3 * numberOfPoints));
@@ -118,17 +139,36 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
   result.CutPoints = cut.GetCounts().AddedPoints;
   result.SnappedPoints = cut.GetCounts().SnappedPoints;
 
+  // The cells first, as the largest arrays: the core's copy is freed before the points and
+  // the cell data are made (AAL, 116 labels: 222 MB).
+  const vtkIdType cells = cut.GetNumberOfCells();
+  {
+    const std::vector<std::int64_t> cellIds = cut.TakeCells();
+    const vtkIdType total = cut.GetNumberOfPoints();
+    const bool fits32 = total < std::numeric_limits<std::int32_t>::max() &&
+      cells * (Dim + 1) < std::numeric_limits<std::int32_t>::max();
+    output->SetCells(Dim == 3 ? VTK_TETRA : VTK_TRIANGLE,
+      fits32 ? stmCutInput::FixedSizeCells<std::int32_t>(cellIds, Dim + 1)
+             : stmCutInput::FixedSizeCells<std::int64_t>(cellIds, Dim + 1));
+  }
+  filter->UpdateProgress(0.88);
+
   // Points: the input's, then each added point on its edge, in order (an edge's ends come
-  // first), with the point data interpolated the same way.
+  // first), with the point data interpolated the same way; written straight into the output.
   const std::vector<stm::CutEdge>& added = cut.GetAddedPoints();
   const vtkIdType total = numberOfPoints + static_cast<vtkIdType>(added.size());
-  xyz.resize(static_cast<std::size_t>(3 * total));
+  vtkNew<vtkDoubleArray> coordinates;
+  coordinates->SetNumberOfComponents(3);
+  coordinates->SetNumberOfTuples(total);
+  double* xyzOut = coordinates->GetPointer(0);
+  std::copy(xyz.begin(), xyz.end(), xyzOut);
+  std::vector<double>().swap(xyz);
   for (vtkIdType p = numberOfPoints; p < total; ++p)
   {
     const stm::CutEdge& edge = added[p - numberOfPoints];
     for (int c = 0; c < 3; ++c)
     {
-      xyz[3 * p + c] = (1.0 - edge.T) * xyz[3 * edge.A + c] + edge.T * xyz[3 * edge.B + c];
+      xyzOut[3 * p + c] = (1.0 - edge.T) * xyzOut[3 * edge.A + c] + edge.T * xyzOut[3 * edge.B + c];
     }
   }
   if (options.SnapVertices)
@@ -140,16 +180,11 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
       {
         for (vtkIdType p = begin; p < end; ++p)
         {
-          double original[3] = { xyz[3 * p], xyz[3 * p + 1], xyz[3 * p + 2] };
-          frame.Lift<Dim>(places.data() + p * Dim, original, xyz.data() + 3 * p);
+          double original[3] = { xyzOut[3 * p], xyzOut[3 * p + 1], xyzOut[3 * p + 2] };
+          frame.Lift<Dim>(places.data() + p * Dim, original, xyzOut + 3 * p);
         }
       });
   }
-  vtkNew<vtkDoubleArray> coordinates;
-  coordinates->SetNumberOfComponents(3);
-  coordinates->SetNumberOfTuples(total);
-  std::copy(xyz.begin(), xyz.end(), coordinates->GetPointer(0));
-  std::vector<double>().swap(xyz);
   vtkNew<vtkPoints> points;
   points->SetData(coordinates);
   output->SetPoints(points);
@@ -167,27 +202,15 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
   }
   filter->UpdateProgress(0.92);
 
-  const std::vector<std::int64_t>& cellIds = cut.GetCells();
-  const vtkIdType cells = cut.GetNumberOfCells();
-  const bool fits32 = total < std::numeric_limits<std::int32_t>::max() &&
-    cells * (Dim + 1) < std::numeric_limits<std::int32_t>::max();
-  output->SetCells(Dim == 3 ? VTK_TETRA : VTK_TRIANGLE,
-    fits32 ? stmCutInput::FixedSizeCells<std::int32_t>(cellIds, Dim + 1)
-           : stmCutInput::FixedSizeCells<std::int64_t>(cellIds, Dim + 1));
-
   vtkCellData* inCD = input->GetCellData();
   vtkCellData* outCD = output->GetCellData();
   outCD->CopyAllocate(inCD, cells);
-  vtkNew<vtkIdList> parentIds;
-  parentIds->SetNumberOfIds(cells);
-  std::copy(cut.GetCellParents().begin(), cut.GetCellParents().end(), parentIds->GetPointer(0));
-  vtkNew<vtkIdList> places;
-  places->SetNumberOfIds(cells);
-  for (vtkIdType c = 0; c < cells; ++c)
   {
-    places->SetId(c, c);
+    vtkNew<vtkIdList> parentIds;
+    parentIds->SetNumberOfIds(cells);
+    std::copy(cut.GetCellParents().begin(), cut.GetCellParents().end(), parentIds->GetPointer(0));
+    outCD->CopyData(inCD, parentIds);
   }
-  outCD->CopyData(inCD, parentIds, places);
   if (vtkAbstractArray* original = outCD->GetAbstractArray("Material"))
   {
     original->SetName("OriginalMaterial");
@@ -275,8 +298,7 @@ int stmMultiMaterialCut::RequestData(
     return fail("the cell array Material must have one component, it has " +
       std::to_string(materialArray->GetNumberOfComponents()));
   }
-  const std::vector<std::int64_t> labels = stmCutInput::CellMaterials(input);
-  const std::vector<std::int64_t> order = PeelingOrder(labels, this->BackgroundMaterial);
+  const std::vector<std::int64_t> order = PeelingOrder(materialArray, this->BackgroundMaterial);
   if (order.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
   {
     return fail("too many materials");
@@ -297,7 +319,7 @@ int stmMultiMaterialCut::RequestData(
     [&](auto dim, const auto* ids)
     {
       return Cut<decltype(dim)::value>(
-        this, input, ids, labels, order, frame, options, output, result);
+        this, input, ids, materialArray, order, frame, options, output, result);
     });
   if (!status.IsOk())
   {

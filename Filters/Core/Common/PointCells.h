@@ -10,18 +10,27 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace stm
 {
 
 /// Point -> incident cells, in compressed rows (each point's cells in ascending order).
-template <int Dim>
+/// CellId: how the rows store cell ids; std::int32_t halves the rows' memory, for meshes of
+/// fewer than 2^31 cells (the builder checks; see FitsCellIds).
+template <int Dim, class CellId = std::int64_t>
 struct PointCells
 {
   static constexpr int Corners = Dim + 1;
   std::vector<std::int64_t> Offsets; // numberOfPoints + 1
-  std::vector<std::int64_t> Cells;
+  std::vector<CellId> Cells;
+
+  /// Whether CellId holds every cell id of a mesh of numberOfCells cells.
+  static constexpr bool FitsCellIds(std::int64_t numberOfCells)
+  {
+    return numberOfCells <= static_cast<std::int64_t>(std::numeric_limits<CellId>::max());
+  }
 
   /// connectivity: Dim + 1 point ids per cell, each in [0, numberOfPoints).
   template <class IdType>
@@ -40,7 +49,8 @@ struct PointCells
     std::vector<std::int64_t> next(this->Offsets.begin(), this->Offsets.end() - 1);
     for (std::int64_t i = 0; i < numberOfCells * Corners; ++i)
     {
-      this->Cells[next[static_cast<std::int64_t>(connectivity[i])]++] = i / Corners;
+      this->Cells[next[static_cast<std::int64_t>(connectivity[i])]++] =
+        static_cast<CellId>(i / Corners);
     }
   }
 
@@ -74,7 +84,7 @@ struct PointCells
       std::int32_t* Counts;
       bool Fill;
       const std::int64_t* Offsets;
-      std::int64_t* Cells;
+      CellId* Cells;
       void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
       {
         for (std::int64_t k = begin; k < end; ++k)
@@ -87,7 +97,7 @@ struct PointCells
             const auto id = static_cast<std::int64_t>(this->Connectivity[i]);
             if (this->Fill)
             {
-              this->Cells[this->Offsets[id] + own[id]++] = i / Corners;
+              this->Cells[this->Offsets[id] + own[id]++] = static_cast<CellId>(i / Corners);
             }
             else
             {
@@ -140,8 +150,8 @@ struct PointCells
   template <class IdType>
   std::int64_t FacetNeighbour(const IdType* ids, std::int64_t cell, int corner) const
   {
-    const std::int64_t* cursor[Dim];
-    const std::int64_t* stop[Dim];
+    const CellId* cursor[Dim];
+    const CellId* stop[Dim];
     for (int j = 0, f = 0; j <= Dim; ++j)
     {
       if (j != corner)

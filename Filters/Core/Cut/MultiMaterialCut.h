@@ -450,6 +450,9 @@ public:
     return static_cast<std::int64_t>(this->CellMaterials.size());
   }
   const std::vector<std::int64_t>& GetCells() const { return this->Cells; }
+  /// Moves the cells out (GetCells is empty after; GetNumberOfCells stays), so that a caller
+  /// that copies them into its own arrays can free them at once.
+  std::vector<std::int64_t> TakeCells() { return std::move(this->Cells); }
   /// Per output cell: its material index, and the input cell it lies in.
   const std::vector<std::int32_t>& GetCellMaterials() const { return this->CellMaterials; }
   const std::vector<std::int64_t>& GetCellParents() const { return this->CellParents; }
@@ -513,6 +516,18 @@ private:
     }
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
+  }
+
+  /// Room for `extra` more values, growing by a quarter at least (not the doubling of
+  /// push_back): the cell arrays are the largest of the cut.
+  template <class Value>
+  static void GrowCapacity(std::vector<Value>& values, std::int64_t extra)
+  {
+    const std::size_t needed = values.size() + static_cast<std::size_t>(extra);
+    if (needed > values.capacity())
+    {
+      values.reserve(std::max(needed, values.capacity() + values.capacity() / 4));
+    }
   }
 
   static void AdjustIncidence(
@@ -657,6 +672,12 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const double* poi
   this->Fractions = std::move(fractions);
   this->AddedPoints.clear();
   this->Counts = MultiMaterialCutCounts();
+  // The pieces add about a tenth to the cells (AAL, 116 labels: 9 %): room for an eighth more
+  // up front, and GrowCapacity after, instead of the doubling of push_back, which left the
+  // cells' three arrays at twice their size at the peak of the cut (AAL: 560 MB of 1.43 GB).
+  const auto roomyCells = static_cast<std::size_t>(numberOfCells + numberOfCells / 8);
+  this->Cells.clear();
+  this->Cells.reserve(roomyCells * (Dim + 1));
   this->Cells.resize(static_cast<std::size_t>(numberOfCells * (Dim + 1)));
   for (std::int64_t i = 0; i < numberOfCells * (Dim + 1); ++i)
   {
@@ -666,7 +687,11 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const double* poi
     }
     this->Cells[i] = static_cast<std::int64_t>(connectivity[i]);
   }
+  this->CellMaterials.clear();
+  this->CellMaterials.reserve(roomyCells);
   this->CellMaterials.assign(static_cast<std::size_t>(numberOfCells), Remaining);
+  this->CellParents.clear();
+  this->CellParents.reserve(roomyCells);
   this->CellParents.resize(static_cast<std::size_t>(numberOfCells));
   this->Incidence.assign(static_cast<std::size_t>(numberOfPoints), 0);
   this->LocalIds.assign(static_cast<std::size_t>(numberOfPoints), -1);
@@ -1035,6 +1060,14 @@ void MultiMaterialCut<Dim>::CommitStep(StepWork& work)
   // steps of the materials its parent carries.
   const auto pieces = static_cast<std::int64_t>(work.Parents.size());
   const std::vector<std::int64_t>& parents = work.Parents;
+  std::int64_t appended = 0;
+  for (std::int64_t piece = 1; piece < pieces; ++piece)
+  {
+    appended += parents[piece] == parents[piece - 1] ? 1 : 0;
+  }
+  GrowCapacity(this->Cells, appended * (Dim + 1));
+  GrowCapacity(this->CellMaterials, appended);
+  GrowCapacity(this->CellParents, appended);
   std::int64_t ids[Dim + 1];
   for (std::int64_t first = 0; first < pieces;)
   {

@@ -449,7 +449,10 @@ private:
   std::vector<double> Composed; // Taubin's targets after the mu step
   std::vector<std::uint8_t> Roles;
   std::vector<std::uint8_t> OnOuterBoundary; // per point: a corner of a facet with no neighbour
-  PointCells<Dim> Incidence;
+  // 32-bit rows: a move reads its point's row three times, and the rows are the smoother's
+  // largest array (AAL, 116 labels: 111 MB instead of 222 MB).
+  using Incidences = PointCells<Dim, std::int32_t>;
+  Incidences Incidence;
   std::vector<std::int64_t> SurfaceOffsets; // point -> its surface neighbours (CSR)
   std::vector<std::int64_t> SurfaceNeighbours;
   std::vector<std::int8_t> Signs;
@@ -508,7 +511,7 @@ void BoundarySmoother<Dim>::ConstrainJunctions(const IdType* connectivity,
   std::vector<std::vector<std::int64_t>> chunkPoints(static_cast<std::size_t>(chunks));
   struct JunctionKernel
   {
-    using Entry = typename PointCells<Dim>::FacetEntry;
+    using Entry = typename Incidences::FacetEntry;
     struct Scratch
     {
       std::vector<Entry> Entries;
@@ -665,6 +668,11 @@ Status BoundarySmoother<Dim>::Validate(double* points, std::int64_t numberOfPoin
   if (numberOfPoints < 0 || numberOfCells < 0 || (numberOfPoints > 0 && !points))
   {
     return Status::Invalid("no points or negative counts");
+  }
+  if (!Incidences::FitsCellIds(numberOfCells))
+  {
+    return Status::Invalid(
+      "the smoother takes at most 2^31 - 1 cells, the mesh has " + std::to_string(numberOfCells));
   }
   if (options.NumberOfIterations < 0)
   {
@@ -1054,7 +1062,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     new std::atomic<std::uint16_t>[static_cast<std::size_t>(cells)]());
   struct FacetKernel
   {
-    using Entry = typename PointCells<Dim>::FacetEntry;
+    using Entry = typename Incidences::FacetEntry;
     struct Scratch
     {
       std::vector<Entry> Entries;

@@ -218,4 +218,54 @@ TEST(PointCells, ParallelBuildGivesTheSerialRows)
   CheckParallelBuild<4>(8);   // 98,304 4-simplices
 }
 
+/// Rows of 32-bit cell ids (what the smoother keeps) hold the cells of the 64-bit rows, from
+/// either build, and give the same facet neighbours.
+template <int Dim>
+void CheckNarrowRows(int n)
+{
+  constexpr int Corners = Dim + 1;
+  std::int64_t points = 0;
+  const std::vector<std::int64_t> grid = KuhnGrid<Dim>(n, points);
+  const auto cells = static_cast<std::int64_t>(grid.size()) / Corners;
+  stm::PointCells<Dim> wide;
+  wide.Build(grid.data(), cells, points);
+  stm::PointCells<Dim, std::int32_t> serial;
+  serial.Build(grid.data(), cells, points);
+  stm::ThreadPoolExecutor executor(2);
+  stm::PointCells<Dim, std::int32_t> parallel;
+  parallel.Build(grid.data(), cells, points, executor);
+  const std::vector<std::int64_t> widened(serial.Cells.begin(), serial.Cells.end());
+  EXPECT_EQ(serial.Offsets, wide.Offsets);
+  EXPECT_EQ(widened, wide.Cells);
+  EXPECT_EQ(parallel.Offsets, wide.Offsets);
+  EXPECT_EQ(parallel.Cells, serial.Cells);
+  std::int64_t inner = 0;
+  for (std::int64_t c = 0; c < cells; ++c)
+  {
+    for (int corner = 0; corner < Corners; ++corner)
+    {
+      const std::int64_t neighbour = serial.FacetNeighbour(grid.data() + c * Corners, c, corner);
+      ASSERT_EQ(neighbour, wide.FacetNeighbour(grid.data() + c * Corners, c, corner));
+      inner += neighbour >= 0 ? 1 : 0;
+    }
+  }
+  // The outer boundary: 2 Dim faces of n^(Dim-1) cube faces, each of (Dim-1)! facets.
+  std::int64_t boundary = 2 * Dim;
+  for (int d = 1; d < Dim; ++d)
+  {
+    boundary *= n * d;
+  }
+  EXPECT_EQ(inner, cells * Corners - boundary);
+}
+
+TEST(PointCells, NarrowRowsHoldTheSameCells)
+{
+  CheckNarrowRows<2>(190); // 72,200 triangles: the parallel build's ranges
+  CheckNarrowRows<3>(23);  // 73,002 tetrahedra
+  CheckNarrowRows<4>(8);   // 98,304 4-simplices
+  EXPECT_TRUE((stm::PointCells<3, std::int32_t>::FitsCellIds(2147483647)));
+  EXPECT_FALSE((stm::PointCells<3, std::int32_t>::FitsCellIds(2147483648)));
+  EXPECT_TRUE((stm::PointCells<3>::FitsCellIds(2147483648)));
+}
+
 } // namespace
