@@ -7,6 +7,7 @@
 // extraction).
 
 #include "Execution.h"
+#include "UninitializedVector.h"
 
 #include <algorithm>
 #include <cstdint>
@@ -24,7 +25,7 @@ struct PointCells
 {
   static constexpr int Corners = Dim + 1;
   std::vector<std::int64_t> Offsets; // numberOfPoints + 1
-  std::vector<CellId> Cells;
+  UninitializedVector<CellId> Cells; // every element written by Build, first by its threads
 
   /// Whether CellId holds every cell id of a mesh of numberOfCells cells.
   static constexpr bool FitsCellIds(std::int64_t numberOfCells)
@@ -45,7 +46,7 @@ struct PointCells
     {
       this->Offsets[p + 1] += this->Offsets[p];
     }
-    this->Cells.assign(static_cast<std::size_t>(numberOfCells * Corners), 0);
+    this->Cells.resize(static_cast<std::size_t>(numberOfCells * Corners));
     std::vector<std::int64_t> next(this->Offsets.begin(), this->Offsets.end() - 1);
     for (std::int64_t i = 0; i < numberOfCells * Corners; ++i)
     {
@@ -138,7 +139,7 @@ struct PointCells
     {
       this->Offsets[p + 1] += this->Offsets[p];
     }
-    this->Cells.assign(static_cast<std::size_t>(numberOfCells * Corners), 0);
+    this->Cells.resize(static_cast<std::size_t>(numberOfCells * Corners));
     CountKernel fill{ connectivity, numberOfCells, chunkCells, points, counts.data(), true,
       this->Offsets.data(), this->Cells.data() };
     executor.For(0, Chunks, 1, fill);

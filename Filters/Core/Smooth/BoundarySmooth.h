@@ -135,6 +135,7 @@
 #include "Common/Execution.h"
 #include "Common/PointCells.h"
 #include "Common/Status.h"
+#include "Common/UninitializedVector.h"
 
 #include <algorithm>
 #include <atomic>
@@ -444,9 +445,10 @@ private:
   double* Points = nullptr;
   std::int64_t NumberOfPoints = 0;
   std::int64_t NumberOfCells = 0;
-  std::vector<double> Original;
-  std::vector<double> Targets;
-  std::vector<double> Composed; // Taubin's targets after the mu step
+  // Copied from the points by the threads before the iterations (UninitializedVector).
+  UninitializedVector<double> Original;
+  UninitializedVector<double> Targets;
+  UninitializedVector<double> Composed; // Taubin's targets after the mu step
   std::vector<std::uint8_t> Roles;
   std::vector<std::uint8_t> OnOuterBoundary; // per point: a corner of a facet with no neighbour
   // 32-bit rows: a move reads its point's row three times, and the rows are the smoother's
@@ -455,11 +457,12 @@ private:
   Incidences Incidence;
   std::vector<std::int64_t> SurfaceOffsets; // point -> its surface neighbours (CSR)
   std::vector<std::int64_t> SurfaceNeighbours;
-  std::vector<std::int8_t> Signs;
+  // Written in full by the first measure, which touches them first (UninitializedVector).
+  UninitializedVector<std::int8_t> Signs;
   std::vector<std::int64_t> EdgeOffsets; // interior-layer point -> its edge neighbours (CSR)
   std::vector<std::int64_t> EdgeNeighbours;
-  std::vector<Shape> Shapes; // per cell, together: a move reads and writes both
-  std::vector<double> Determinants;
+  UninitializedVector<Shape> Shapes; // per cell, together: a move reads and writes both
+  UninitializedVector<double> Determinants;
   double ConditionBound = 0.0;
   double CosineBound = 1.0;
   double OptionCosine = 1.0; // the cosine of MinDihedralAngle
@@ -960,9 +963,9 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   }
 
   // The input's shapes: orientation, quality, volume.
-  this->Signs.assign(static_cast<std::size_t>(cells), 1);
-  this->Shapes.assign(static_cast<std::size_t>(cells), Shape{ 0.0, 1.0 });
-  this->Determinants.assign(static_cast<std::size_t>(cells), 0.0);
+  this->Signs.resize(static_cast<std::size_t>(cells));
+  this->Shapes.resize(static_cast<std::size_t>(cells));
+  this->Determinants.resize(static_cast<std::size_t>(cells));
   struct MeasureKernel
   {
     using Scratch = NoScratch;
@@ -1394,10 +1397,33 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   executor.ReportProgress(0.1);
 
   // The iterations.
-  this->Original.assign(points, points + numberOfPoints * Dim);
-  this->Targets.assign(points, points + numberOfPoints * Dim);
-  this->Composed.assign(
-    options.Method == SmoothingMethod::Taubin ? this->Targets.size() : std::size_t{ 0 }, 0.0);
+  this->Original.resize(static_cast<std::size_t>(numberOfPoints * Dim));
+  this->Targets.resize(static_cast<std::size_t>(numberOfPoints * Dim));
+  this->Composed.resize(
+    options.Method == SmoothingMethod::Taubin ? this->Targets.size() : std::size_t{ 0 });
+  struct CopyKernel
+  {
+    using Scratch = NoScratch;
+    BoundarySmoother* Self;
+    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    {
+      BoundarySmoother& self = *this->Self;
+      std::copy(
+        self.Points + begin * Dim, self.Points + end * Dim, self.Original.data() + begin * Dim);
+      std::copy(
+        self.Points + begin * Dim, self.Points + end * Dim, self.Targets.data() + begin * Dim);
+      if (!self.Composed.empty())
+      {
+        std::fill(self.Composed.data() + begin * Dim, self.Composed.data() + end * Dim, 0.0);
+      }
+    }
+  };
+  CopyKernel copies{ this };
+  executor.For(0, numberOfPoints, 1 << 14, copies);
+  if (executor.ShouldAbort())
+  {
+    return Status::Aborted(); // the copies may be incomplete
+  }
   const double lambda = options.RelaxationFactor;
   const double mu = TaubinMu(lambda, options.PassBand);
   constexpr bool project = !std::is_same<std::decay_t<Projector>, NoProjection>::value;
@@ -1455,9 +1481,9 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   this->Stats.AcceptedMoves = this->Accepted;
   this->Stats.ReducedMoves = this->Reduced;
   this->Stats.RejectedMoves = this->Rejected;
-  std::vector<double>().swap(this->Targets);
-  std::vector<double>().swap(this->Composed);
-  std::vector<double>().swap(this->Original);
+  UninitializedVector<double>().swap(this->Targets);
+  UninitializedVector<double>().swap(this->Composed);
+  UninitializedVector<double>().swap(this->Original);
   std::vector<std::int64_t>().swap(this->EdgeOffsets);
   std::vector<std::int64_t>().swap(this->EdgeNeighbours);
   executor.ReportProgress(1.0);
