@@ -336,6 +336,24 @@ private:
     }
   }
 
+  /// Compressed rows from rows gathered per chunk of points: offsets holds each point's count
+  /// at p + 1 and becomes the prefix sums; the chunks are joined in order and freed.
+  static void JoinRows(std::vector<std::vector<std::int64_t>>& chunks,
+    std::vector<std::int64_t>& offsets, std::vector<std::int64_t>& rows)
+  {
+    for (std::size_t p = 0; p + 1 < offsets.size(); ++p)
+    {
+      offsets[p + 1] += offsets[p];
+    }
+    rows.clear();
+    rows.reserve(static_cast<std::size_t>(offsets.back()));
+    for (std::vector<std::int64_t>& chunk : chunks)
+    {
+      rows.insert(rows.end(), chunk.begin(), chunk.end());
+      std::vector<std::int64_t>().swap(chunk);
+    }
+  }
+
   /// Greedy colouring in the order of `items`: each gets the smallest colour that no item
   /// visited by forEachNeighbour(item, visit) has in `colours` (indexed by item, -1: none yet).
   /// Returns the items by colour; `colours` keeps the colours of `items`.
@@ -1130,77 +1148,92 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     outerMasks[c] = static_cast<std::uint8_t>(bits >> FacetKernel::OuterShift & CornerBits);
   }
 
-  // Roles, and the surface neighbours: edges of surface facets, counted with repeats, then
-  // sorted and made unique per point.
+  // Roles, and the surface neighbours (the other points of the surface facets around each
+  // point), per point over its cells in parallel, each point's neighbours sorted and unique,
+  // gathered per chunk of points and joined in chunk order: the rows of a serial pass.
   this->Roles.assign(static_cast<std::size_t>(numberOfPoints), Other);
   this->OnOuterBoundary.assign(static_cast<std::size_t>(numberOfPoints), 0);
-  std::vector<std::int64_t> counts(static_cast<std::size_t>(numberOfPoints) + 1, 0);
-  for (std::int64_t c = 0; c < cells; ++c)
+  this->SurfaceOffsets.assign(static_cast<std::size_t>(numberOfPoints) + 1, 0);
   {
-    const IdType* ids = connectivity + c * Corners;
-    for (int i = 0; i <= Dim; ++i)
+    constexpr std::int64_t RoleChunk = 4096;
+    const std::int64_t roleChunks = (numberOfPoints + RoleChunk - 1) / RoleChunk;
+    std::vector<std::vector<std::int64_t>> chunkNeighbours(static_cast<std::size_t>(roleChunks));
+    struct RoleKernel
     {
-      for (int j = 0; j <= Dim; ++j)
+      struct Scratch
       {
-        if (j == i)
-        {
-          continue;
-        }
-        const auto id = static_cast<std::int64_t>(ids[j]);
-        if (fixedMasks[c] >> i & 1)
-        {
-          this->Roles[id] = Fixed;
-        }
-        this->OnOuterBoundary[id] |= outerMasks[c] >> i & 1;
-        if (surfaceMasks[c] >> i & 1)
-        {
-          this->Roles[id] = this->Roles[id] == Fixed ? Fixed : Surface;
-          counts[id + 1] += Dim - 1;
-        }
-      }
-    }
-  }
-  for (std::int64_t p = 0; p < numberOfPoints; ++p)
-  {
-    counts[p + 1] += counts[p];
-  }
-  std::vector<std::int64_t> pairs(static_cast<std::size_t>(counts.back()));
-  {
-    std::vector<std::int64_t> next(counts.begin(), counts.end() - 1);
-    for (std::int64_t c = 0; c < cells; ++c)
-    {
-      const IdType* ids = connectivity + c * Corners;
-      for (int i = 0; i <= Dim; ++i)
+        std::vector<std::int64_t> Ids;
+      };
+      BoundarySmoother* Self;
+      const IdType* Connectivity;
+      const std::uint8_t* SurfaceMasks;
+      const std::uint8_t* FixedMasks;
+      const std::uint8_t* OuterMasks;
+      std::vector<std::int64_t>* Chunks;
+      void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
       {
-        if (!(surfaceMasks[c] >> i & 1))
+        BoundarySmoother& self = *this->Self;
+        for (std::int64_t chunk = begin; chunk < end; ++chunk)
         {
-          continue;
-        }
-        for (int a = 0; a <= Dim; ++a)
-        {
-          for (int b = 0; b <= Dim; ++b)
+          std::vector<std::int64_t>& out = this->Chunks[chunk];
+          const std::int64_t last = std::min(self.NumberOfPoints, (chunk + 1) * RoleChunk);
+          for (std::int64_t p = chunk * RoleChunk; p < last; ++p)
           {
-            if (a != i && b != i && a != b)
+            bool fixed = false, surface = false;
+            std::uint8_t outer = 0;
+            scratch.Ids.clear();
+            for (std::int64_t k = self.Incidence.Offsets[p]; k < self.Incidence.Offsets[p + 1]; ++k)
             {
-              pairs[next[static_cast<std::int64_t>(ids[a])]++] = static_cast<std::int64_t>(ids[b]);
+              const std::int64_t c = self.Incidence.Cells[k];
+              const IdType* ids = this->Connectivity + c * Corners;
+              for (int corner = 0; corner <= Dim; ++corner)
+              {
+                if (static_cast<std::int64_t>(ids[corner]) != p)
+                {
+                  continue;
+                }
+                // The facets opposite the other corners hold p.
+                for (int i = 0; i <= Dim; ++i)
+                {
+                  if (i == corner)
+                  {
+                    continue;
+                  }
+                  fixed = fixed || (this->FixedMasks[c] >> i & 1);
+                  outer |= this->OuterMasks[c] >> i & 1;
+                  if (this->SurfaceMasks[c] >> i & 1)
+                  {
+                    surface = true;
+                    for (int b = 0; b <= Dim; ++b)
+                    {
+                      if (b != i && b != corner)
+                      {
+                        scratch.Ids.push_back(static_cast<std::int64_t>(ids[b]));
+                      }
+                    }
+                  }
+                }
+              }
             }
+            self.Roles[p] = fixed ? Fixed : surface ? Surface : Other;
+            self.OnOuterBoundary[p] = outer;
+            std::sort(scratch.Ids.begin(), scratch.Ids.end());
+            const auto unique = std::unique(scratch.Ids.begin(), scratch.Ids.end());
+            out.insert(out.end(), scratch.Ids.begin(), unique);
+            self.SurfaceOffsets[p + 1] = static_cast<std::int64_t>(unique - scratch.Ids.begin());
           }
         }
       }
-    }
+    };
+    RoleKernel roles{ this, connectivity, surfaceMasks.data(), fixedMasks.data(), outerMasks.data(),
+      chunkNeighbours.data() };
+    executor.For(0, roleChunks, 1, roles);
+    JoinRows(chunkNeighbours, this->SurfaceOffsets, this->SurfaceNeighbours);
   }
-  this->SurfaceOffsets.assign(static_cast<std::size_t>(numberOfPoints) + 1, 0);
-  this->SurfaceNeighbours.clear();
-  for (std::int64_t p = 0; p < numberOfPoints; ++p)
+  if (executor.ShouldAbort())
   {
-    auto first = pairs.begin() + counts[p], last = pairs.begin() + counts[p + 1];
-    std::sort(first, last);
-    last = std::unique(first, last);
-    this->SurfaceNeighbours.insert(this->SurfaceNeighbours.end(), first, last);
-    this->SurfaceOffsets[p + 1] = static_cast<std::int64_t>(this->SurfaceNeighbours.size());
+    return Status::Aborted();
   }
-  std::vector<std::int64_t>().swap(pairs);
-  std::vector<std::int64_t>().swap(counts);
   this->ConstrainJunctions(connectivity, materials, surfaceMasks, executor);
 
   // Interior layers by edge hops from the surface: layer k + 1 is the points without a role
@@ -1349,17 +1382,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     options.SmallPartPoints > 0 ? static_cast<std::size_t>(numberOfPoints) : std::size_t{ 0 }, 0);
   EdgeKernel edges{ this, connectivity, chunkNeighbours.data(), tips.data() };
   executor.For(0, edgeChunks, 1, edges);
-  for (std::int64_t p = 0; p < numberOfPoints; ++p)
-  {
-    this->EdgeOffsets[p + 1] += this->EdgeOffsets[p];
-  }
-  this->EdgeNeighbours.clear();
-  this->EdgeNeighbours.reserve(static_cast<std::size_t>(this->EdgeOffsets.back()));
-  for (std::vector<std::int64_t>& chunk : chunkNeighbours)
-  {
-    this->EdgeNeighbours.insert(this->EdgeNeighbours.end(), chunk.begin(), chunk.end());
-    std::vector<std::int64_t>().swap(chunk);
-  }
+  JoinRows(chunkNeighbours, this->EdgeOffsets, this->EdgeNeighbours);
   if (executor.ShouldAbort())
   {
     return Status::Aborted();
