@@ -19,6 +19,7 @@
 #include "vtkImplicitFunction.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
+#include "vtkLookupTable.h"
 #include "vtkMath.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
@@ -100,7 +101,8 @@ vtkSmartPointer<vtkCellArray> SplitCellArray(
 }
 
 /// A copy of `source` with room for `tuples` tuples (at least its own), allocated once: a deep
-/// copy and a resize would hold the array twice at the peak.
+/// copy and a resize would hold the array twice at the peak. It keeps what DeepCopy keeps: the
+/// name, the component names, the information and a data array's lookup table.
 vtkSmartPointer<vtkAbstractArray> ExtendedCopy(vtkAbstractArray* source, vtkIdType tuples)
 {
   vtkSmartPointer<vtkAbstractArray> copy = vtk::TakeSmartPointer(source->NewInstance());
@@ -110,6 +112,14 @@ vtkSmartPointer<vtkAbstractArray> ExtendedCopy(vtkAbstractArray* source, vtkIdTy
   if (source->HasInformation())
   {
     copy->CopyInformation(source->GetInformation(), /*deep=*/1);
+  }
+  vtkDataArray* sourceData = vtkDataArray::SafeDownCast(source);
+  if (sourceData && sourceData->GetLookupTable())
+  {
+    vtkSmartPointer<vtkLookupTable> table =
+      vtk::TakeSmartPointer(sourceData->GetLookupTable()->NewInstance());
+    table->DeepCopy(sourceData->GetLookupTable());
+    vtkDataArray::SafeDownCast(copy)->SetLookupTable(table);
   }
   copy->SetNumberOfTuples(tuples);
   copy->InsertTuples(0, source->GetNumberOfTuples(), 0, source);

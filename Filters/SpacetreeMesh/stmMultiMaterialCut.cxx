@@ -139,12 +139,15 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
   result.CutPoints = cut.GetCounts().AddedPoints;
   result.SnappedPoints = cut.GetCounts().SnappedPoints;
 
+  // Points: the input's, then each added point on its edge, in order (an edge's ends come
+  // first).
+  const std::vector<stm::CutEdge>& added = cut.GetAddedPoints();
+  const vtkIdType total = numberOfPoints + static_cast<vtkIdType>(added.size());
   // The cells first, as the largest arrays: the core's copy is freed before the points and
   // the cell data are made (AAL, 116 labels: 222 MB).
   const vtkIdType cells = cut.GetNumberOfCells();
   {
     const std::vector<std::int64_t> cellIds = cut.TakeCells();
-    const vtkIdType total = cut.GetNumberOfPoints();
     const bool fits32 = total < std::numeric_limits<std::int32_t>::max() &&
       cells * (Dim + 1) < std::numeric_limits<std::int32_t>::max();
     output->SetCells(Dim == 3 ? VTK_TETRA : VTK_TRIANGLE,
@@ -153,10 +156,8 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
   }
   filter->UpdateProgress(0.88);
 
-  // Points: the input's, then each added point on its edge, in order (an edge's ends come
-  // first), with the point data interpolated the same way; written straight into the output.
-  const std::vector<stm::CutEdge>& added = cut.GetAddedPoints();
-  const vtkIdType total = numberOfPoints + static_cast<vtkIdType>(added.size());
+  // The points, written straight into the output, and the point data interpolated the same
+  // way.
   vtkNew<vtkDoubleArray> coordinates;
   coordinates->SetNumberOfComponents(3);
   coordinates->SetNumberOfTuples(total);

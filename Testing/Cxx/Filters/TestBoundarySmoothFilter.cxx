@@ -21,6 +21,7 @@
 #include "vtkImageData.h"
 #include "vtkImageThreshold.h"
 #include "vtkIntArray.h"
+#include "vtkLookupTable.h"
 #include "vtkMath.h"
 #include "vtkNIFTIImageReader.h"
 #include "vtkNew.h"
@@ -252,6 +253,9 @@ TEST(BoundarySmoothFilter, SplitInteriorEdgesOfNeedles)
     points->InsertNextPoint(0.35 * std::cos(angle), 0.35 * std::sin(angle), 0.0);
     tag->InsertNextValue(0.0);
   }
+  // What a deep copy keeps, the extended copies of the split keep too.
+  tag->SetComponentName(0, "Level");
+  tag->CreateDefaultLookupTable();
   star->SetPoints(points);
   star->GetPointData()->AddArray(tag);
   vtkNew<vtkIntArray> material;
@@ -272,7 +276,17 @@ TEST(BoundarySmoothFilter, SplitInteriorEdgesOfNeedles)
   EXPECT_EQ(added, (std::array<double, 3>{ 0.0, 0.0, 0.0 }));
   vtkUnstructuredGrid* output = smooth->GetOutput();
   ASSERT_EQ(output->GetNumberOfPoints(), 9);
-  EXPECT_EQ(output->GetPointData()->GetArray("Tag")->GetTuple1(8), 15.0);
+  vtkDataArray* splitTag = output->GetPointData()->GetArray("Tag");
+  ASSERT_NE(splitTag, nullptr);
+  EXPECT_EQ(splitTag->GetTuple1(0), 10.0);
+  EXPECT_EQ(splitTag->GetTuple1(1), 20.0);
+  EXPECT_EQ(splitTag->GetTuple1(8), 15.0);
+  ASSERT_NE(splitTag->GetComponentName(0), nullptr);
+  EXPECT_STREQ(splitTag->GetComponentName(0), "Level");
+  ASSERT_NE(splitTag->GetLookupTable(), nullptr);
+  EXPECT_NE(splitTag->GetLookupTable(), tag->GetLookupTable());
+  EXPECT_EQ(splitTag->GetLookupTable()->GetNumberOfTableValues(),
+    tag->GetLookupTable()->GetNumberOfTableValues());
   vtkDataArray* displacement = output->GetPointData()->GetArray("SmoothingDisplacement");
   ASSERT_NE(displacement, nullptr);
   EXPECT_EQ(vtkMath::Norm(displacement->GetTuple3(8)), 0.0);
