@@ -24,6 +24,8 @@ packages=(
   libdouble-conversion-dev
   # real test data: NIfTI brain atlases under /usr/share/mricron/templates
   mricron-data
+  # independent readers of the finite-element exports in the tests: Gmsh and meshio
+  gmsh python3-gmsh python3-meshio
   # offscreen GUI runs
   xvfb xauth
 )

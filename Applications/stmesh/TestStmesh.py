@@ -54,7 +54,8 @@ DEFAULT_CUT_PARAMETERS = {"separating": "labels", "materials": "merged", "thin_p
 STAIRCASE_CUT_PARAMETERS = dict(DEFAULT_CUT_PARAMETERS, separating="none")
 # The label merging and structure report parameters of the summary when none of their options
 # is given.
-DEFAULT_LABEL_PARAMETERS = {"merge": [], "min_component_voxels": 1, "interfaces": None}
+DEFAULT_LABEL_PARAMETERS = {"merge": [], "min_component_voxels": 1, "interfaces": None,
+                            "background": "keep", "msh_format": "ascii"}
 
 
 class CaseFailed(Exception):
@@ -2866,6 +2867,243 @@ def case_report_cut(c):
     check(load_summary(summary_path)["materials"] is None, "surface output has a report")
     check(not any(line.startswith("materials:") for line in out.splitlines()),
           "surface output prints a materials line")
+
+
+# ------------------------------------------------------------------------------------------------
+# Finite-element outputs (.msh, .mesh, .inp, .feb), read back by independent readers: Gmsh itself
+# (Debian's gmsh and python3-gmsh), meshio (python3-meshio) and, for FEBio's XML, ElementTree.
+
+FE_EXTENSIONS = [".msh", ".mesh", ".inp", ".feb"]
+
+
+def vtu_grid(path):
+    """(points as tuples, cells as point-id tuples, VTK cell types, Material) of a .vtu."""
+    _, grid, _ = read_grid(path)
+    materials = grid.GetCellData().GetArray("Material")
+    cells, types = [], []
+    for cell in range(grid.GetNumberOfCells()):
+        ids = grid.GetCell(cell).GetPointIds()
+        cells.append(tuple(ids.GetId(k) for k in range(ids.GetNumberOfIds())))
+        types.append(grid.GetCellType(cell))
+    return ([grid.GetPoint(p) for p in range(grid.GetNumberOfPoints())], cells, types,
+            [int(materials.GetTuple1(cell)) for cell in range(grid.GetNumberOfCells())])
+
+
+def gmsh_check(c, path):
+    """Gmsh's own reading and coherence check: no warning (a negative volume, a duplicate node
+    or element) and no error."""
+    completed = subprocess.run(["gmsh", "-check", path], capture_output=True, text=True,
+                               timeout=250)
+    print(completed.stdout[-2000:])
+    check(completed.returncode == 0, "gmsh -check %s exited with %d" % (path,
+                                                                         completed.returncode))
+    problems = [line for line in (completed.stdout + completed.stderr).splitlines()
+                if line.startswith("Warning") or line.startswith("Error")]
+    check(not problems, "gmsh -check %s: %s" % (path, problems[:5]))
+
+
+def gmsh_groups(path):
+    """{physical tag: (name, elements)} as Gmsh's Python API reads them."""
+    import gmsh
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(path)
+        groups = {}
+        for dim, tag in gmsh.model.getPhysicalGroups():
+            count = 0
+            for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, tag):
+                _, element_tags, _ = gmsh.model.mesh.getElements(dim, entity)
+                count += sum(len(tags) for tags in element_tags)
+            groups[tag] = (gmsh.model.getPhysicalName(dim, tag), count)
+        return groups
+    finally:
+        gmsh.finalize()
+
+
+def meshio_counts(path, key):
+    """(points, {tag: elements}) read by meshio; key: the cell data of the tags."""
+    import meshio
+    mesh = meshio.read(path)
+    counts = {}
+    for block in mesh.cell_data[key]:
+        for tag in block:
+            counts[int(tag)] = counts.get(int(tag), 0) + 1
+    return mesh, counts
+
+
+def febio_parts(path):
+    """{part name: (element type, elements)}, nodes, domains {name: material} and material names
+    of a .feb file."""
+    import xml.etree.ElementTree as ET
+    root = ET.parse(path).getroot()
+    check(root.tag == "febio_spec" and root.get("version") == "4.0", "%s is no FEBio 4.0 file"
+          % path)
+    parts = {part.get("name"): (part.get("type"), len(part.findall("elem")))
+             for part in root.find("Mesh").findall("Elements")}
+    nodes = root.find("Mesh").find("Nodes").findall("node")
+    domains = {domain.get("name"): domain.get("mat")
+               for domain in root.find("MeshDomains").findall("SolidDomain")}
+    materials = [material.get("name") for material in root.find("Material").findall("material")]
+    return parts, nodes, domains, materials
+
+
+def check_fe_outputs(c, image, name, arguments, names):
+    """Writes the mesh of `arguments` as .vtu (--background drop, the reference) and in every
+    finite-element format, and checks what each reader finds: the same points bit for bit, the
+    same elements per material (tag = label) with the names of `names`, and Gmsh's check."""
+    reference = c.path(name + ".vtu")
+    c.run_ok([image, "-o", reference, "--background", "drop"] + arguments)
+    points, cells, types, materials = vtu_grid(reference)
+    check(0 not in materials, "--background drop left background cells")
+    per_material = {}
+    for material in materials:
+        per_material[material] = per_material.get(material, 0) + 1
+    for extension in FE_EXTENSIONS + [".binary.msh"]:
+        output, summary_path = c.path(name + extension), c.path(name + extension + ".json")
+        extra = ["--msh-format", "binary"] if extension == ".binary.msh" else []
+        c.run_ok([image, "-o", output, "--summary", summary_path] + arguments + extra)
+        summary = load_summary(summary_path)
+        check(summary["parameters"]["background"] == "drop", "%s: background %s" %
+              (extension, summary["parameters"]["background"]))
+        check(stage(summary, "write")["file_bytes"] == os.path.getsize(output),
+              "%s: the summary's file size" % extension)
+        if extension.endswith(".msh"):
+            gmsh_check(c, output)
+            groups = gmsh_groups(output)
+            check({tag: count for tag, (_, count) in groups.items()} == per_material,
+                  "%s: Gmsh's groups %s, the .vtu's materials %s" % (extension, groups,
+                                                                     per_material))
+            for tag, (group_name, _) in groups.items():
+                check(group_name == names.get(tag, "Material_%d" % tag),
+                      "%s: group %d is named %r" % (extension, tag, group_name))
+            mesh, counts = meshio_counts(output, "gmsh:physical")
+        elif extension == ".mesh":
+            mesh, counts = meshio_counts(output, "medit:ref")
+        elif extension == ".inp":
+            import meshio
+            mesh = meshio.read(output)
+            counts = {}
+            # meshio keeps only the last *ELEMENT block of a set (pyramids and hexahedra are
+            # both C3D8 blocks of it), so the sets are counted here, line by line.
+            words = {re.sub("[^A-Za-z0-9]", "_", names.get(label, "Material_%d" % label)): label
+                     for label in per_material}
+            current = None
+            with open(output) as abaqus_file:
+                for line in abaqus_file:
+                    if line.startswith("*"):
+                        match = re.match(r"\*ELEMENT, TYPE=C3D[468], ELSET=(\w+)$", line.strip())
+                        current = match.group(1) if match else None
+                        check(current is None or current in words, "Abaqus: ELSET %s" % current)
+                    elif current is not None:
+                        counts[words[current]] = counts.get(words[current], 0) + 1
+        if extension != ".feb":
+            check(counts == per_material, "%s: elements per material %s, the .vtu's %s" %
+                  (extension, counts, per_material))
+            check(len(mesh.points) == len(points) and all(
+                tuple(float(x) for x in mesh.points[p]) == tuple(points[p])
+                for p in range(len(points))), "%s: the points differ from the .vtu's" % extension)
+            check(sum(len(block.data) for block in mesh.cells) == len(cells),
+                  "%s: %d elements, the .vtu has %d" % (extension, sum(len(block.data)
+                                                                       for block in mesh.cells),
+                                                        len(cells)))
+        else:
+            parts, nodes, domains, materials_named = febio_parts(output)
+            check(len(nodes) == len(points), "FEBio: %d nodes, the .vtu has %d" %
+                  (len(nodes), len(points)))
+            check(sum(count for _, count in parts.values()) == len(cells),
+                  "FEBio: elements %s" % parts)
+            check(sorted(domains) == sorted(parts) and
+                  all(material in materials_named for material in domains.values()),
+                  "FEBio: domains %s, parts %s, materials %s" % (domains, sorted(parts),
+                                                                 materials_named))
+    return per_material, types
+
+
+def case_export_formats(c):
+    # The ball (label 1) with a box inside (label 3), every label its own material, named by a
+    # label table in MRIcron's format (label 3 in ITK-SNAP's quotes).
+    image, _ = write_label_image(c, "ball.nii", (16, 15, 14), ball)
+    table = c.path("names.txt")
+    with open(table, "w") as names_file:
+        names_file.write("# labels\n1 Ball 2001\n3 0 0 255 1 1 1 \"Inner box\"\n7 Absent\n")
+    names = {1: "Ball", 3: "Inner box"}
+    per_material, types = check_fe_outputs(c, image, "ball", ["--materials", "separate",
+                                                              "--label-names", table], names)
+    check(sorted(per_material) == [1, 3] and set(types) == {TETRA},
+          "materials %s, types %s" % (per_material, set(types)))
+    # The names also travel in the .vtu as field data.
+    _, grid, _ = read_grid(c.path("ball.vtu"))
+    field = grid.GetFieldData()
+    names_array = field.GetAbstractArray("MaterialNames")
+    labels_array = field.GetArray("MaterialNameLabels")
+    check(names_array is not None and labels_array is not None and
+          [names_array.GetValue(i) for i in range(names_array.GetNumberOfValues())] ==
+          ["Ball", "Inner box", "Absent"] and
+          [int(labels_array.GetTuple1(i)) for i in range(3)] == [1, 3, 7],
+          "the .vtu's label table")
+    # A hybrid mesh (hexahedra, pyramids, tetrahedra): Gmsh finds no negative volume, so every
+    # format's corner order is right; pyramids are collapsed C3D8 in Abaqus.
+    boxes, _ = write_label_image(c, "boxes.nii", (12, 10, 8), two_boxes)
+    per_material, types = check_fe_outputs(
+        c, boxes, "hybrid", ["--elements", "hybrid", "--stop-after", "tessellate"], {})
+    check(sorted(per_material) == [1, 2] and {TETRA, PYRAMID, HEXAHEDRON} <= set(types),
+          "hybrid: materials %s, types %s" % (per_material, set(types)))
+    import meshio
+    abaqus = meshio.read(c.path("hybrid.inp"))
+    check(sum(len(block.data) for block in abaqus.cells if block.type == "hexahedron") ==
+          sum(1 for t in types if t in (HEXAHEDRON, PYRAMID)),
+          "Abaqus: hexahedra and collapsed pyramids")
+    # The background kept on request: its cells get the tag after the largest label.
+    kept = c.path("kept.msh")
+    c.run_ok([boxes, "-o", kept, "--background", "keep", "--stop-after", "tessellate",
+              "--boundary-layer", "1"])
+    groups = gmsh_groups(kept)
+    check(sorted(groups) == [1, 2, 3] and groups[3][0] == "Material_0",
+          "kept background: groups %s" % groups)
+
+
+def case_export_two_dimensional(c):
+    flat = c.make_image("slice.vti", variant="2d")
+    output = c.path("slice.msh")
+    c.run_ok([flat, "-o", output])
+    gmsh_check(c, output)
+    import meshio
+    mesh = meshio.read(output)
+    check({block.type for block in mesh.cells} == {"triangle"}, "2D cell types %s" %
+          {block.type for block in mesh.cells})
+    medit = c.path("slice.mesh")
+    c.run_ok([flat, "-o", medit])
+    check({block.type for block in meshio.read(medit).cells} == {"triangle"}, "Medit 2D")
+    for extension, text in [(".inp", "the Abaqus export writes solid elements"),
+                            (".feb", "the FEBio export writes solid elements")]:
+        c.run_failing([flat, "-o", c.path("slice" + extension)], 1, text,
+                      output=c.path("slice" + extension))
+
+
+def case_error_export_options(c):
+    image, _ = write_label_image(c, "ball.nii", (16, 15, 14), ball)
+    bad_table = c.path("bad.txt")
+    with open(bad_table, "w") as names_file:
+        names_file.write("1 Ball\nthree Box\n")
+    twice = c.path("twice.txt")
+    with open(twice, "w") as names_file:
+        names_file.write("1 Ball\n1 Box\n")
+    for arguments, code, text in [
+            (["--msh-format", "binary", "-o", c.path("x.vtu")], 2, "--msh-format applies to"),
+            (["--msh-format", "big", "-o", c.path("x.msh")], 2, "not one of ascii, binary"),
+            (["--background", "maybe", "-o", c.path("x.msh")], 2, "not one of keep, drop"),
+            (["--output-mode", "surface", "-o", c.path("x.msh")], 2,
+             "the finite-element formats hold volume meshes"),
+            (["--label-names", c.path("missing.txt"), "--materials", "separate", "-o",
+              c.path("x.msh")], 1, "cannot open the label table"),
+            (["--label-names", bad_table, "--materials", "separate", "-o", c.path("x.msh")], 1,
+             "line 2 of the label table does not start with an integer"),
+            (["--label-names", twice, "--materials", "separate", "-o", c.path("x.msh")], 1,
+             "label 1 is named twice"),
+            (["--label-names", twice, "-o", c.path("x.msh")], 2,
+             "the cut makes the body of several labels one material")]:
+        c.run_failing([image] + arguments, code, text, output=c.path("x.msh"))
 
 
 def main():

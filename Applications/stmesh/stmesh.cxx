@@ -22,10 +22,15 @@
  */
 
 #include "Check/SimplexQuality.h"
+#include "stmAbaqusWriter.h"
 #include "stmBoundarySmooth.h"
+#include "stmFEBioWriter.h"
+#include "stmGmshWriter.h"
 #include "stmImageToSpacetree.h"
 #include "stmInterfaceSurface.h"
+#include "stmLabelTable.h"
 #include "stmMarchingSimplices.h"
+#include "stmMeditWriter.h"
 #include "stmMultiMaterialCut.h"
 #include "stmSeparatingFunction.h"
 #include "stmSpacetreeBalance.h"
@@ -46,6 +51,7 @@
 #include "vtkDataArrayRange.h"
 #include "vtkDoubleArray.h"
 #include "vtkExecutive.h"
+#include "vtkExtractCells.h"
 #include "vtkFieldData.h"
 #include "vtkGenericCell.h"
 #include "vtkIdList.h"
@@ -169,8 +175,23 @@ Arguments:
                         /usr/share/mricron/templates/aal.nii.gz (Debian package mricron-data).
   -o OUTPUT             .vtu (VTK XML, inline binary) or .vtk (legacy VTK, binary); with
                         --output-mode surface .vtp (VTK XML polydata, inline binary) or .vtk.
-                        Default: the input's base name with .vtu (.vtp for a surface), in the
-                        current directory.
+                        Finite-element formats, one group per material (tag = the label; the
+                        labels of 0 or less, such as the background, take the tags after the
+                        largest label), node and element numbers = VTK ids + 1: .msh (Gmsh
+                        4.1, a named physical group per material), .mesh (Medit, references
+                        = tags), .inp (Abaqus, an ELSET per material; solids only), .feb
+                        (FEBio 4.0, a SolidDomain and a placeholder material per material;
+                        solids only). Default: the input's base name with .vtu (.vtp for a
+                        surface), in the current directory.
+  --msh-format F        ascii (the default, Gmsh's) or binary, for a .msh output.
+  --background B        keep or drop the cells of Material 0 (the layer of background cells
+                        around the body that the cut needs; the cut's outside) in the output.
+                        Default: drop for the finite-element formats, keep for the VTK ones.
+  --label-names FILE    names of the labels, one "LABEL NAME" per line (MRIcron's .txt beside
+                        an atlas, e.g. /usr/share/mricron/templates/aal.nii.txt; FreeSurfer's
+                        colour tables; ITK-SNAP's label files, name in double quotes): they name
+                        the material groups of the finite-element outputs and go into every
+                        output mesh as the field data MaterialNames and MaterialNameLabels.
   --labels L1,L2,...|all
                         labels that form the body of interest. Default (or all): every
                         non-zero label.
@@ -479,8 +500,19 @@ enum class MeshFormat
 {
   XMLUnstructuredGrid,
   LegacyVTK,
-  XMLPolyData // the cut's surface only
+  XMLPolyData, // the cut's surface only
+  Gmsh,        // .msh, 4.1
+  Medit,       // .mesh
+  Abaqus,      // .inp
+  FEBio        // .feb
 };
+
+/// The finite-element formats: volume meshes only, written by the module's writers.
+bool IsFiniteElementFormat(MeshFormat format)
+{
+  return format == MeshFormat::Gmsh || format == MeshFormat::Medit ||
+    format == MeshFormat::Abaqus || format == MeshFormat::FEBio;
+}
 
 bool FindMeshFormat(const std::string& path, MeshFormat& format)
 {
@@ -499,6 +531,16 @@ bool FindMeshFormat(const std::string& path, MeshFormat& format)
   {
     format = MeshFormat::LegacyVTK;
     return true;
+  }
+  const std::pair<const char*, MeshFormat> finiteElement[] = { { ".msh", MeshFormat::Gmsh },
+    { ".mesh", MeshFormat::Medit }, { ".inp", MeshFormat::Abaqus }, { ".feb", MeshFormat::FEBio } };
+  for (const auto& entry : finiteElement)
+  {
+    if (lower.size() > std::strlen(entry.first) && EndsWith(lower, entry.first))
+    {
+      format = entry.second;
+      return true;
+    }
   }
   return false;
 }
@@ -653,9 +695,13 @@ struct Options
   std::string SummaryPath;
   std::string Compressor = "lz4"; // of .vtu files: lz4, zlib or none
   std::string Interfaces;         // --interfaces: the interface surface's file, or empty
-  std::string Pattern = "auto";   // normalised: lower case, no blanks
-  int PatternCounts = 0;          // split counts per entry (2 or 3); 0 for auto
-  std::vector<int> RootCellSize;  // empty: automatic; else 2 or 3 sizes in voxels
+  bool BinaryMsh = false;         // --msh-format binary
+  int Background = -1;            // --background: 1 keep, 0 drop, -1 the format's default
+  bool MshFormatGiven = false;
+  std::string LabelNames;        // --label-names: the label table's file, or empty
+  std::string Pattern = "auto";  // normalised: lower case, no blanks
+  int PatternCounts = 0;         // split counts per entry (2 or 3); 0 for auto
+  std::vector<int> RootCellSize; // empty: automatic; else 2 or 3 sizes in voxels
   std::vector<std::pair<int, double>> LabelMaxCellSizes;
   RegionOption RefineRegion;
   double Grading = 0.0; // 0: off
@@ -1261,7 +1307,7 @@ Options ParseCommandLine(int argc, char* argv[])
       "--balance-label", "--balance-region", "--elements", "--templates", "--cell-template",
       "--boundary-layer", "--separating", "--output-mode", "--keep", "--iso", "--alpha", "--snap",
       "--smooth-iterations", "--smooth-method", "--merge", "--min-component-voxels", "--interfaces",
-      "--materials", "--thin-parts" };
+      "--materials", "--thin-parts", "--msh-format", "--label-names", "--background" };
     if (valueOptions.count(name) == 0)
     {
       throw UsageError("unknown option '" + name + "'");
@@ -1431,6 +1477,31 @@ Options ParseCommandLine(int argc, char* argv[])
       }
       options.Compressor = value;
     }
+    else if (name == "--msh-format")
+    {
+      if (value != "ascii" && value != "binary")
+      {
+        throw UsageError("--msh-format: '" + value + "' is not one of ascii, binary");
+      }
+      options.BinaryMsh = value == "binary";
+      options.MshFormatGiven = true;
+    }
+    else if (name == "--background")
+    {
+      if (value != "keep" && value != "drop")
+      {
+        throw UsageError("--background: '" + value + "' is not one of keep, drop");
+      }
+      options.Background = value == "keep" ? 1 : 0;
+    }
+    else if (name == "--label-names")
+    {
+      if (value.empty())
+      {
+        throw UsageError("--label-names needs a file name");
+      }
+      options.LabelNames = value;
+    }
     else if (name == "--threads")
     {
       options.Threads = static_cast<int>(ParseInteger(value, name, 1, MaxThreads));
@@ -1553,13 +1624,32 @@ Options ParseCommandLine(int argc, char* argv[])
     }
   }
 
-  MeshFormat format;
+  MeshFormat format = MeshFormat::XMLUnstructuredGrid;
   const char* const extensions = options.WritesSurface()
     ? "use .vtp (VTK XML polydata) or .vtk (legacy VTK) for --output-mode surface"
-    : "use .vtu (VTK XML) or .vtk (legacy VTK)";
+    : "use .vtu (VTK XML), .vtk (legacy VTK), .msh (Gmsh 4.1), .mesh (Medit), .inp (Abaqus) or "
+      ".feb (FEBio 4.0)";
   if (!options.Output.empty() && !FindMeshFormat(options.Output, format))
   {
     throw UsageError("output '" + options.Output + "' has an unsupported extension; " + extensions);
+  }
+  if (!options.Output.empty() && options.WritesSurface() && IsFiniteElementFormat(format))
+  {
+    throw UsageError("output '" + options.Output +
+      "': the finite-element formats hold volume meshes, but --output-mode surface writes a "
+      "surface; " +
+      extensions);
+  }
+  if (!options.LabelNames.empty() && options.Cuts() && !options.SeparateMaterials &&
+    options.Labels.size() != 1)
+  {
+    throw UsageError("--label-names names the image's labels, but the cut makes the body of "
+                     "several labels one material (Material 1); give --materials separate "
+                     "(every label its own material) or one label with --labels");
+  }
+  if (options.MshFormatGiven && (options.Output.empty() || format != MeshFormat::Gmsh))
+  {
+    throw UsageError("--msh-format applies to a .msh output (-o FILE.msh)");
   }
   if (!options.Output.empty() && options.WritesSurface() &&
     format == MeshFormat::XMLUnstructuredGrid)
@@ -1585,7 +1675,7 @@ Options ParseCommandLine(int argc, char* argv[])
   {
     MeshFormat interfaceFormat;
     if (!FindMeshFormat(options.Interfaces, interfaceFormat) ||
-      interfaceFormat == MeshFormat::XMLUnstructuredGrid)
+      (interfaceFormat != MeshFormat::XMLPolyData && interfaceFormat != MeshFormat::LegacyVTK))
     {
       throw UsageError("--interfaces '" + options.Interfaces +
         "': the interfaces are polydata; use .vtp (VTK XML polydata) or .vtk (legacy VTK)");
@@ -2742,7 +2832,61 @@ int WriteLegacy(vtkDataObject* mesh, const std::string& path, unsigned long& err
 }
 
 void WriteMesh(vtkPointSet* mesh, const std::string& path, MeshFormat format,
-  const std::string& compressor, StageReport& report);
+  const std::string& compressor, bool binaryMsh, StageReport& report);
+
+/// Whether the output leaves out the cells of Material 0 (--background, or the format's
+/// default: the finite-element formats drop them, a solver has no use for the layer of
+/// background cells around the body).
+bool DropsBackground(const Options& options, MeshFormat format)
+{
+  return options.Background == 0 || (options.Background < 0 && IsFiniteElementFormat(format));
+}
+
+/// The mesh without its cells of Material 0 and the points only they used (an unstructured
+/// grid; a mesh without the array is returned as it is).
+vtkSmartPointer<vtkPointSet> WithoutBackground(vtkPointSet* mesh)
+{
+  vtkDataArray* materials = mesh->GetCellData()->GetArray("Material");
+  if (!materials || !vtkUnstructuredGrid::SafeDownCast(mesh))
+  {
+    return mesh;
+  }
+  vtkNew<vtkIdList> kept;
+  for (vtkIdType cell = 0; cell < mesh->GetNumberOfCells(); ++cell)
+  {
+    if (materials->GetComponent(cell, 0) != 0.0)
+    {
+      kept->InsertNextId(cell);
+    }
+  }
+  if (kept->GetNumberOfIds() == mesh->GetNumberOfCells())
+  {
+    return mesh;
+  }
+  vtkNew<vtkExtractCells> extract;
+  Watch(extract);
+  extract->SetInputData(mesh);
+  extract->SetCellList(kept);
+  extract->AssumeSortedAndUniqueIdsOn();
+  extract->Update();
+  ThrowIfFailed("leaving out the background cells");
+  vtkSmartPointer<vtkPointSet> result = extract->GetOutput();
+  result->GetFieldData()->ShallowCopy(mesh->GetFieldData());
+  return result;
+}
+
+/// Writes a volume mesh with one of the module's finite-element writers.
+template <class Writer>
+int WriteFiniteElement(
+  Writer* writer, vtkPointSet* mesh, const std::string& path, unsigned long& errorCode)
+{
+  Watch(writer);
+  writer->SetInputData(mesh);
+  writer->SetFileName(path.c_str());
+  const int written = writer->Write();
+  errorCode = writer->GetErrorCode();
+  return written;
+}
 
 /// The "interfaces" stage: stmInterfaceSurface on the output mesh, written to --interfaces.
 StageReport WriteInterfaces(vtkPointSet* mesh, const Options& options, bool twoDimensional)
@@ -2760,7 +2904,7 @@ StageReport WriteInterfaces(vtkPointSet* mesh, const Options& options, bool twoD
   const double extraction = SecondsSince(start);
   MeshFormat format = MeshFormat::XMLPolyData;
   FindMeshFormat(options.Interfaces, format); // checked with the command line
-  WriteMesh(surface, options.Interfaces, format, options.Compressor, report);
+  WriteMesh(surface, options.Interfaces, format, options.Compressor, false, report);
   report.Seconds += extraction;
   report.Cells = surface->GetNumberOfCells();
   report.Points = surface->GetNumberOfPoints();
@@ -2771,7 +2915,7 @@ StageReport WriteInterfaces(vtkPointSet* mesh, const Options& options, bool twoD
 
 /// Writes the mesh (a vtkUnstructuredGrid, or the cut's surface as a vtkPolyData).
 void WriteMesh(vtkPointSet* mesh, const std::string& path, MeshFormat format,
-  const std::string& compressor, StageReport& report)
+  const std::string& compressor, bool binaryMsh, StageReport& report)
 {
   const std::string context = "writing '" + path + "'";
   const bool surface = vtkPolyData::SafeDownCast(mesh) != nullptr;
@@ -2799,6 +2943,31 @@ void WriteMesh(vtkPointSet* mesh, const std::string& path, MeshFormat format,
         ? WriteLegacy<vtkPolyDataWriter>(mesh, temporary.GetPath(), errorCode)
         : WriteLegacy<vtkUnstructuredGridWriter>(mesh, temporary.GetPath(), errorCode);
       break;
+    case MeshFormat::Gmsh:
+    {
+      vtkNew<stmGmshWriter> writer;
+      writer->SetBinary(binaryMsh);
+      written = WriteFiniteElement(writer.Get(), mesh, temporary.GetPath(), errorCode);
+      break;
+    }
+    case MeshFormat::Medit:
+    {
+      vtkNew<stmMeditWriter> writer;
+      written = WriteFiniteElement(writer.Get(), mesh, temporary.GetPath(), errorCode);
+      break;
+    }
+    case MeshFormat::Abaqus:
+    {
+      vtkNew<stmAbaqusWriter> writer;
+      written = WriteFiniteElement(writer.Get(), mesh, temporary.GetPath(), errorCode);
+      break;
+    }
+    case MeshFormat::FEBio:
+    {
+      vtkNew<stmFEBioWriter> writer;
+      written = WriteFiniteElement(writer.Get(), mesh, temporary.GetPath(), errorCode);
+      break;
+    }
   }
   ThrowIfFailed(context);
   if (!written || errorCode != 0)
@@ -3390,6 +3559,7 @@ struct RunSummary
   StructureReport Structure;
   std::string Input;
   std::string Output;
+  bool DroppedBackground = false; // the cells of Material 0 left out of the output
   bool DefaultInput = false;
   ImageInfo Image;
   ThreadSetup Threads;
@@ -3431,6 +3601,8 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
        << ", \"cell_template\": " << JsonString(KeywordName(options.CellTemplate, CellTemplates))
        << ", \"boundary_layers\": " << options.BoundaryLayers
        << ", \"compressor\": " << JsonString(options.Compressor)
+       << ", \"background\": " << JsonString(summary.DroppedBackground ? "drop" : "keep")
+       << ", \"msh_format\": " << JsonString(options.BinaryMsh ? "binary" : "ascii")
        << ", \"pattern\": " << JsonString(options.Pattern) << ", \"root_cell_size\": "
        << (options.RootCellSize.empty() ? "null" : JsonList(options.RootCellSize))
        << ", \"max_cell_size_labels\": " << JsonLabelMap(options.LabelMaxCellSizes)
@@ -4823,6 +4995,15 @@ int Run(const Options& options)
       SupportedInputExtensions);
   }
   CheckReadableFile(input);
+  // The label table is read first, so that a bad one fails before the meshing.
+  vtkNew<stmLabelTable> labelTable;
+  if (!options.LabelNames.empty())
+  {
+    if (!labelTable->ReadFile(options.LabelNames.c_str()))
+    {
+      throw Failure(std::string("--label-names: ") + labelTable->GetLastError());
+    }
+  }
   if (options.ReachesSnap() && options.Separating.Kind == SeparatingKind::Gray)
   {
     CheckReadableFile(options.Separating.GrayImage, true);
@@ -5029,7 +5210,20 @@ int Run(const Options& options)
 
   StageReport writeReport;
   writeReport.Name = "write";
-  WriteMesh(mesh, output, meshFormat, options.Compressor, writeReport);
+  // Leaving out the background is part of the write stage.
+  const Clock::time_point writeStart = Clock::now();
+  summary.DroppedBackground = DropsBackground(options, meshFormat);
+  if (summary.DroppedBackground)
+  {
+    mesh = WithoutBackground(mesh);
+  }
+  if (labelTable->GetNumberOfLabels() > 0)
+  {
+    labelTable->WriteFieldData(mesh->GetFieldData());
+  }
+  const double preparation = SecondsSince(writeStart);
+  WriteMesh(mesh, output, meshFormat, options.Compressor, options.BinaryMsh, writeReport);
+  writeReport.Seconds += preparation;
   summary.Stages.push_back(writeReport);
   if (!options.Interfaces.empty())
   {

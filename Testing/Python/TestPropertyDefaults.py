@@ -3,6 +3,7 @@
 For every proxy of /work/main/Plugin/*.xml (STM_XML_DIR):
 - the proxy and every property carry a non-empty <Documentation>;
 - every filter is in the menu category "Spacetree Mesh"; the reader claims .nii and .nii.gz;
+  each writer claims its extension (.msh, .mesh, .inp, .feb);
 - every IntVectorProperty with command="SetX" has an XML default equal to GetX() of a fresh
   instance of the wrapped class (BodyLabels: empty XML default and GetNumberOfBodyLabels() == 0),
   its range domain equals the C++ clamp range, its enumeration the C++ enum;
@@ -40,7 +41,14 @@ EXPECTED_PROXIES = {
     ("filters", "stmBoundarySmooth"),
     ("filters", "stmInterfaceSurface"),
     ("sources", "stmNIFTIReader"),
+    ("writers", "stmGmshWriter"),
+    ("writers", "stmMeditWriter"),
+    ("writers", "stmAbaqusWriter"),
+    ("writers", "stmFEBioWriter"),
 }
+# The file extension each writer claims.
+WRITER_EXTENSIONS = {"stmGmshWriter": "msh", "stmMeditWriter": "mesh", "stmAbaqusWriter": "inp",
+                     "stmFEBioWriter": "feb"}
 # Properties whose command is not a plain SetX/GetX pair, and what they are checked by instead.
 SPECIAL = {"LabelArray", "Input", "FileName", "BodyLabels", "SizingArray", "FunctionArray",
            "GrayImage"}
@@ -301,6 +309,11 @@ for path in xml_files:
                 menu = hints.find("ShowInMenu") if hints is not None else None
                 if menu is None or menu.get("category") != CATEGORY:
                     problem("%s: not in menu category %r" % (where, CATEGORY))
+            elif group_name == "writers":
+                factory = hints.find("WriterFactory") if hints is not None else None
+                if factory is None or factory.get("extensions") != WRITER_EXTENSIONS.get(proxy_name):
+                    problem("%s: the WriterFactory must claim %s" % (where,
+                                                                     WRITER_EXTENSIONS.get(proxy_name)))
             else:
                 factory = hints.find("ReaderFactory") if hints is not None else None
                 if factory is None or sorted(factory.get("extensions", "").split()) != ["nii", "nii.gz"]:
