@@ -2873,7 +2873,7 @@ def case_report_cut(c):
 # Finite-element outputs (.msh, .mesh, .inp, .feb), read back by independent readers: Gmsh itself
 # (Debian's gmsh and python3-gmsh), meshio (python3-meshio) and, for FEBio's XML, ElementTree.
 
-FE_EXTENSIONS = [".msh", ".mesh", ".inp", ".feb"]
+FE_EXTENSIONS = [".msh", ".mesh", ".inp", ".feb", ".exo"]
 
 
 def vtu_grid(path):
@@ -2948,6 +2948,43 @@ def febio_parts(path):
     return parts, nodes, domains, materials
 
 
+def exodus_blocks(path):
+    """{block id: (name, elements, the node ids of its points)} of an Exodus II file read by
+    VTK's vtkExodusIIReader."""
+    from vtkmodules.vtkIOExodus import vtkExodusIIReader
+    reader = vtkExodusIIReader()
+    reader.SetFileName(path)
+    reader.UpdateInformation()
+    count = reader.GetNumberOfObjects(reader.ELEM_BLOCK)
+    for index in range(count):
+        reader.SetObjectStatus(reader.ELEM_BLOCK, index, 1)
+    reader.SetGenerateGlobalNodeIdArray(1)
+    reader.Update()
+    output = reader.GetOutput()
+    blocks = {}
+    iterator = output.NewIterator()
+    iterator.InitTraversal()
+    index = 0
+    while not iterator.IsDoneWithTraversal():
+        block = iterator.GetCurrentDataObject()
+        node_ids = block.GetPointData().GetArray("GlobalNodeId")
+        # Every element has a positive volume as VTK's Exodus reader orders its corners.
+        sizes = vtk_modules()["vtkCellSizeFilter"]()
+        sizes.SetInputData(block)
+        sizes.Update()
+        volumes = sizes.GetOutput().GetCellData().GetArray("Volume")
+        smallest = min(volumes.GetValue(e) for e in range(volumes.GetNumberOfTuples()))
+        check(smallest > 0, "Exodus: block %d has an element of volume %r" %
+              (reader.GetObjectId(reader.ELEM_BLOCK, index), smallest))
+        blocks[reader.GetObjectId(reader.ELEM_BLOCK, index)] = (
+            reader.GetObjectName(reader.ELEM_BLOCK, index), block.GetNumberOfCells(),
+            {int(node_ids.GetTuple1(p)) for p in range(node_ids.GetNumberOfTuples())})
+        index += 1
+        iterator.GoToNextItem()
+    check(index == count, "Exodus: %d blocks read of %d" % (index, count))
+    return blocks, reader.GetNumberOfNodesInFile()
+
+
 def check_fe_outputs(c, image, name, arguments, names):
     """Writes the mesh of `arguments` as .vtu (--background drop, the reference) and in every
     finite-element format, and checks what each reader finds: the same points bit for bit, the
@@ -2997,7 +3034,31 @@ def check_fe_outputs(c, image, name, arguments, names):
                         check(current is None or current in words, "Abaqus: ELSET %s" % current)
                     elif current is not None:
                         counts[words[current]] = counts.get(words[current], 0) + 1
-        if extension != ".feb":
+        if extension == ".exo":
+            blocks, nodes_in_file = exodus_blocks(output)
+            check(nodes_in_file == len(points), "Exodus: %d nodes in the file, the .vtu has %d "
+                  "points" % (nodes_in_file, len(points)))
+            counts = {}
+            for block_id, (block_name, elements, _) in blocks.items():
+                material = block_id if block_id in per_material else int(
+                    next(label for label in per_material
+                         if block_name.startswith(names.get(label, "Material_%d" % label) + "_")))
+                counts[material] = counts.get(material, 0) + elements
+                if block_id in per_material:
+                    # Named after the material, with the element type where it has several.
+                    expected = names.get(block_id, "Material_%d" % block_id)
+                    check(block_name == expected or (len(set(types)) > 1 and
+                                                     block_name.startswith(expected + "_")),
+                          "Exodus: block %d is named %r" % (block_id, block_name))
+            check(counts == per_material, "Exodus: elements per material %s, the .vtu's %s" %
+                  (counts, per_material))
+            # The blocks share their interface nodes, numbered as the .vtu's points + 1.
+            used = set().union(*(nodes for _, _, nodes in blocks.values()))
+            check(used == {p + 1 for cell in cells for p in cell},
+                  "Exodus: the blocks' nodes are not the .vtu's points")
+            check(len(blocks) < 2 or sum(len(nodes) for _, _, nodes in blocks.values()) >
+                  len(used), "Exodus: no node is shared between blocks")
+        elif extension != ".feb":
             check(counts == per_material, "%s: elements per material %s, the .vtu's %s" %
                   (extension, counts, per_material))
             check(len(mesh.points) == len(points) and all(

@@ -24,6 +24,7 @@
 #include "Check/SimplexQuality.h"
 #include "stmAbaqusWriter.h"
 #include "stmBoundarySmooth.h"
+#include "stmExodusWriter.h"
 #include "stmFEBioWriter.h"
 #include "stmGmshWriter.h"
 #include "stmImageToSpacetree.h"
@@ -181,7 +182,8 @@ Arguments:
                         4.1, a named physical group per material), .mesh (Medit, references
                         = tags), .inp (Abaqus, an ELSET per material; solids only), .feb
                         (FEBio 4.0, a SolidDomain and a placeholder material per material;
-                        solids only). Default: the input's base name with .vtu (.vtp for a
+                        solids only), .exo or .e (Exodus II, an element block per material
+                        and cell type; solids only). Default: the input's base name with .vtu (.vtp for a
                         surface), in the current directory.
   --msh-format F        ascii (the default, Gmsh's) or binary, for a .msh output.
   --background B        keep or drop the cells of Material 0 (the layer of background cells
@@ -504,14 +506,15 @@ enum class MeshFormat
   Gmsh,        // .msh, 4.1
   Medit,       // .mesh
   Abaqus,      // .inp
-  FEBio        // .feb
+  FEBio,       // .feb
+  Exodus       // .exo, .e
 };
 
 /// The finite-element formats: volume meshes only, written by the module's writers.
 bool IsFiniteElementFormat(MeshFormat format)
 {
   return format == MeshFormat::Gmsh || format == MeshFormat::Medit ||
-    format == MeshFormat::Abaqus || format == MeshFormat::FEBio;
+    format == MeshFormat::Abaqus || format == MeshFormat::FEBio || format == MeshFormat::Exodus;
 }
 
 bool FindMeshFormat(const std::string& path, MeshFormat& format)
@@ -533,7 +536,8 @@ bool FindMeshFormat(const std::string& path, MeshFormat& format)
     return true;
   }
   const std::pair<const char*, MeshFormat> finiteElement[] = { { ".msh", MeshFormat::Gmsh },
-    { ".mesh", MeshFormat::Medit }, { ".inp", MeshFormat::Abaqus }, { ".feb", MeshFormat::FEBio } };
+    { ".mesh", MeshFormat::Medit }, { ".inp", MeshFormat::Abaqus }, { ".feb", MeshFormat::FEBio },
+    { ".exo", MeshFormat::Exodus }, { ".e", MeshFormat::Exodus } };
   for (const auto& entry : finiteElement)
   {
     if (lower.size() > std::strlen(entry.first) && EndsWith(lower, entry.first))
@@ -1627,8 +1631,8 @@ Options ParseCommandLine(int argc, char* argv[])
   MeshFormat format = MeshFormat::XMLUnstructuredGrid;
   const char* const extensions = options.WritesSurface()
     ? "use .vtp (VTK XML polydata) or .vtk (legacy VTK) for --output-mode surface"
-    : "use .vtu (VTK XML), .vtk (legacy VTK), .msh (Gmsh 4.1), .mesh (Medit), .inp (Abaqus) or "
-      ".feb (FEBio 4.0)";
+    : "use .vtu (VTK XML), .vtk (legacy VTK), .msh (Gmsh 4.1), .mesh (Medit), .inp (Abaqus), "
+      ".feb (FEBio 4.0) or .exo (Exodus II)";
   if (!options.Output.empty() && !FindMeshFormat(options.Output, format))
   {
     throw UsageError("output '" + options.Output + "' has an unsupported extension; " + extensions);
@@ -2965,6 +2969,12 @@ void WriteMesh(vtkPointSet* mesh, const std::string& path, MeshFormat format,
     case MeshFormat::FEBio:
     {
       vtkNew<stmFEBioWriter> writer;
+      written = WriteFiniteElement(writer.Get(), mesh, temporary.GetPath(), errorCode);
+      break;
+    }
+    case MeshFormat::Exodus:
+    {
+      vtkNew<stmExodusWriter> writer;
       written = WriteFiniteElement(writer.Get(), mesh, temporary.GetPath(), errorCode);
       break;
     }

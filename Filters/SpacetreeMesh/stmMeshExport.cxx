@@ -9,18 +9,24 @@
 #include "Export/GmshFormat.h"
 #include "Export/MeditFormat.h"
 
+#include <limits>
+#include <map>
+
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkDataArray.h"
 #include "vtkDoubleArray.h"
+#include "vtkErrorCode.h"
 #include "vtkFieldData.h"
 #include "vtkNew.h"
+#include "vtkPointData.h"
 #include "vtkPoints.h"
 #include "vtkSMPTools.h"
 #include "vtkTypeInt32Array.h"
 #include "vtkTypeInt64Array.h"
 #include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
+#include "vtk_exodusII.h"
 
 #include <cstdio>
 #include <fstream>
@@ -30,6 +36,135 @@ namespace stmMeshExport
 {
 namespace
 {
+/// Exodus II (netCDF-4 flavour: the classic one writes in small pieces, 14 s for the AAL atlas)
+/// through the Exodus library VTK bundles (VTK's vtkExodusIIWriter took 30 s for the AAL atlas's
+/// 116 materials, most of it per block). One element block per material group and
+/// shape (an Exodus block holds one element type): a group's first block has the group's tag as
+/// its id, its other blocks count on after the largest tag, and all the blocks of a group of
+/// several shapes are named "<name>_<type>" (FEBioElementType), others the group's name. Nodes in
+/// point order (no node map needed), the element map the cell ids + 1 in block order.
+template <class IdType>
+bool WriteExodus(const stm::ExportMesh<IdType>& mesh, const stm::ExportBlocks& blocks,
+  const std::string& path, std::string& error)
+{
+  if (blocks.Dimension == 2)
+  {
+    error = "the Exodus export writes solid element blocks, but the mesh is planar (triangles "
+            "or quads); export it to Gmsh or Medit";
+    return false;
+  }
+  if (mesh.NumberOfPoints >= std::numeric_limits<int>::max() ||
+    mesh.NumberOfCells >= std::numeric_limits<int>::max())
+  {
+    error = "the mesh is too large for the Exodus export's 32-bit ids";
+    return false;
+  }
+  std::int64_t nextId = 1;
+  std::vector<int> shapesPerGroup(blocks.Groups.size(), 0);
+  for (const stm::MaterialGroup& group : blocks.Groups)
+  {
+    nextId = std::max(nextId, group.Tag + 1);
+  }
+  for (const stm::ExportBlock& block : blocks.Blocks)
+  {
+    ++shapesPerGroup[block.Group];
+  }
+  int computeWordSize = 8, ioWordSize = 8;
+  const int file = ex_create(path.c_str(), EX_CLOBBER | EX_NETCDF4, &computeWordSize, &ioWordSize);
+  if (file < 0)
+  {
+    error = "cannot create the Exodus file";
+    return false;
+  }
+  bool ok = ex_put_init(file, "SpacetreeMesh", 3, mesh.NumberOfPoints, mesh.NumberOfCells,
+              static_cast<std::int64_t>(blocks.Blocks.size()), 0, 0) >= 0;
+  // Every block is defined, and named, before any data is written: netCDF moves the data
+  // written so far each time a definition is added (the AAL atlas: 14 s against 1 s).
+  std::vector<char> groupStarted(blocks.Groups.size(), 0);
+  std::vector<std::int64_t> blockIds;
+  std::vector<std::string> names;
+  for (const stm::ExportBlock& block : blocks.Blocks)
+  {
+    const stm::MaterialGroup& group = blocks.Groups[block.Group];
+    const std::int64_t id = groupStarted[block.Group] ? nextId++ : group.Tag;
+    groupStarted[block.Group] = 1;
+    blockIds.push_back(id);
+    names.push_back(shapesPerGroup[block.Group] > 1
+        ? group.Name + "_" + stm::FEBioElementType(block.Shape)
+        : group.Name);
+    const auto shape = static_cast<stm::ElementShape>(block.Shape);
+    const char* type = shape == stm::ElementShape::Tetra ? "TETRA"
+      : shape == stm::ElementShape::Pyramid              ? "PYRAMID"
+      : shape == stm::ElementShape::Wedge                ? "WEDGE"
+                                                         : "HEX8";
+    ok = ok &&
+      ex_put_block(file, EX_ELEM_BLOCK, id, type, block.End - block.Begin,
+        stm::ShapeCorners(block.Shape), 0, 0, 0) >= 0;
+  }
+  std::vector<char*> pointers;
+  for (std::string& name : names)
+  {
+    pointers.push_back(&name[0]);
+  }
+  ok = ok && (pointers.empty() || ex_put_names(file, EX_ELEM_BLOCK, pointers.data()) >= 0);
+  {
+    std::vector<double> coordinates[3];
+    for (int c = 0; c < 3; ++c)
+    {
+      coordinates[c].resize(static_cast<std::size_t>(mesh.NumberOfPoints));
+    }
+    vtkSMPTools::For(0, mesh.NumberOfPoints,
+      [&](vtkIdType begin, vtkIdType end)
+      {
+        for (vtkIdType p = begin; p < end; ++p)
+        {
+          for (int c = 0; c < 3; ++c)
+          {
+            coordinates[c][p] = mesh.Points[3 * p + c];
+          }
+        }
+      });
+    ok = ok &&
+      ex_put_coord(file, coordinates[0].data(), coordinates[1].data(), coordinates[2].data()) >= 0;
+  }
+  std::vector<int> elementMap;
+  elementMap.reserve(static_cast<std::size_t>(mesh.NumberOfCells));
+  for (std::size_t b = 0; b < blocks.Blocks.size(); ++b)
+  {
+    const stm::ExportBlock& block = blocks.Blocks[b];
+    const int corners = stm::ShapeCorners(block.Shape);
+    const std::int64_t count = block.End - block.Begin;
+    std::vector<int> connectivity(static_cast<std::size_t>(count * corners));
+    vtkSMPTools::For(0, count,
+      [&](vtkIdType begin, vtkIdType end)
+      {
+        for (vtkIdType i = begin; i < end; ++i)
+        {
+          const std::int64_t cell = blocks.Cells[block.Begin + i];
+          const IdType* ids = mesh.Connectivity + mesh.Offsets[cell];
+          for (int v = 0; v < corners; ++v)
+          {
+            connectivity[i * corners + v] =
+              static_cast<int>(ids[stm::FiniteElementCorner(block.Shape, v)]) + 1;
+          }
+        }
+      });
+    ok = ok &&
+      ex_put_conn(file, EX_ELEM_BLOCK, blockIds[b], connectivity.data(), nullptr, nullptr) >= 0;
+    for (std::int64_t i = block.Begin; i < block.End; ++i)
+    {
+      elementMap.push_back(static_cast<int>(blocks.Cells[i] + 1));
+    }
+  }
+  ok = ok && (elementMap.empty() || ex_put_id_map(file, EX_ELEM_MAP, elementMap.data()) >= 0);
+  ok = ex_close(file) >= 0 && ok;
+  if (!ok)
+  {
+    error = "the Exodus library failed to write the file (disk full?)";
+  }
+  return ok;
+}
+
 template <class IdType>
 bool WriteTyped(stmSMPExecutor& executor, const stm::ExportMesh<IdType>& mesh,
   const std::vector<stm::MaterialName>& names, const std::string& path, Format format,
@@ -44,6 +179,17 @@ bool WriteTyped(stmSMPExecutor& executor, const stm::ExportMesh<IdType>& mesh,
   }
   // A temporary file beside the target (the same file system, so the rename is atomic).
   const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
+  if (format == Format::Exodus)
+  {
+    if (!WriteExodus(mesh, blocks, temporary, error) ||
+      std::rename(temporary.c_str(), path.c_str()) != 0)
+    {
+      std::remove(temporary.c_str());
+      error = error.empty() ? "cannot rename '" + temporary + "' to '" + path + "'" : error;
+      return false;
+    }
+    return true;
+  }
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     if (!out)
@@ -65,6 +211,8 @@ bool WriteTyped(stmSMPExecutor& executor, const stm::ExportMesh<IdType>& mesh,
         break;
       case Format::FEBio:
         status = stm::WriteFEBio(out, mesh, blocks, executor);
+        break;
+      case Format::Exodus:
         break;
     }
     out.close();

@@ -31,7 +31,8 @@ enum class Format
   GmshBinary,
   Medit,
   Abaqus,
-  FEBio
+  FEBio,
+  Exodus // through the Exodus library VTK bundles
 };
 
 /// Writes `input` to `fileName`; false with a message. `writer` gets the progress and is asked

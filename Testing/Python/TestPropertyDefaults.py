@@ -3,7 +3,7 @@
 For every proxy of /work/main/Plugin/*.xml (STM_XML_DIR):
 - the proxy and every property carry a non-empty <Documentation>;
 - every filter is in the menu category "Spacetree Mesh"; the reader claims .nii and .nii.gz;
-  each writer claims its extension (.msh, .mesh, .inp, .feb);
+  each writer claims its extension (.msh, .mesh, .inp, .feb, .exo);
 - every IntVectorProperty with command="SetX" has an XML default equal to GetX() of a fresh
   instance of the wrapped class (BodyLabels: empty XML default and GetNumberOfBodyLabels() == 0),
   its range domain equals the C++ clamp range, its enumeration the C++ enum;
@@ -45,10 +45,11 @@ EXPECTED_PROXIES = {
     ("writers", "stmMeditWriter"),
     ("writers", "stmAbaqusWriter"),
     ("writers", "stmFEBioWriter"),
+    ("writers", "stmExodusWriter"),
 }
 # The file extension each writer claims.
 WRITER_EXTENSIONS = {"stmGmshWriter": "msh", "stmMeditWriter": "mesh", "stmAbaqusWriter": "inp",
-                     "stmFEBioWriter": "feb"}
+                     "stmFEBioWriter": "feb", "stmExodusWriter": "exo"}
 # Properties whose command is not a plain SetX/GetX pair, and what they are checked by instead.
 SPECIAL = {"LabelArray", "Input", "FileName", "BodyLabels", "SizingArray", "FunctionArray",
            "GrayImage"}

@@ -1,7 +1,7 @@
 """The finite-element writers from Python (run by pvpython).
 
 - paraview.simple's SaveData picks the plugin's writer by the file's extension (.msh, .mesh,
-  .inp, .feb), as File > Save Data does, and the Gmsh writer's Binary property reaches it.
+  .inp, .feb, .exo), as File > Save Data does, and the Gmsh writer's Binary property reaches it.
 - The files are read back by independent readers: Gmsh's own Python API and meshio (Debian's
   python3-gmsh, python3-meshio) and, for FEBio, ElementTree. Each has the mesh's points bit for
   bit, its element count, and per material (Material: 2 and 5 here) the same number of elements,
@@ -19,7 +19,7 @@ from paraview.simple import LoadPlugin, PVTrivialProducer, SaveData
 import spacetreemesh
 import stmtesting as T
 from vtkmodules.vtkCommonCore import vtkPoints
-from vtkmodules.vtkCommonDataModel import VTK_POLYGON, vtkUnstructuredGrid
+from vtkmodules.vtkCommonDataModel import VTK_POLYGON, VTK_WEDGE, vtkUnstructuredGrid
 
 PLUGIN = T.env("STM_PLUGIN")
 LoadPlugin(PLUGIN, ns=globals())
@@ -113,6 +113,63 @@ T.check_equal(len(list(root.iter("node"))), len(points), "FEBio nodes")
 T.check_equal({d.get("name"): d.get("mat") for d in root.iter("SolidDomain")},
               {"Left_box": "Left_box", "Right_box": "Right_box"}, "FEBio domains")
 
+path = T.temp_path("boxes.exo")
+SaveData(path, proxy=named)
+from vtkmodules.vtkIOExodus import vtkExodusIIReader  # noqa: E402
+exodus = vtkExodusIIReader()
+exodus.SetFileName(path)
+exodus.UpdateInformation()
+blocks = {exodus.GetObjectId(exodus.ELEM_BLOCK, i): (exodus.GetObjectName(exodus.ELEM_BLOCK, i),
+                                                     exodus.GetNumberOfEntriesInObject(
+                                                         exodus.ELEM_BLOCK, i))
+          for i in range(exodus.GetNumberOfObjects(exodus.ELEM_BLOCK))}
+T.check_equal(blocks, {m: (NAMES[m], n) for m, n in per_material.items()}, "Exodus element blocks")
+T.check_equal(exodus.GetNumberOfNodesInFile(), len(points), "Exodus nodes")
+
+# A wedge (none of the pipeline's outputs has one), positive in VTK's order, whose first
+# triangle the finite-element formats turn toward the second.
+wedge = vtkUnstructuredGrid()
+wedge_points = vtkPoints()
+for x in [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, -1), (1, 0, -1), (0, 1, -1)]:
+    wedge_points.InsertNextPoint(x)
+wedge.SetPoints(wedge_points)
+wedge.InsertNextCell(VTK_WEDGE, 6, [0, 1, 2, 3, 4, 5])
+from vtkmodules.vtkFiltersVerdict import vtkCellSizeFilter  # noqa: E402
+positive = vtkCellSizeFilter()
+positive.SetInputData(wedge)
+positive.Update()
+T.check(positive.GetOutput().GetCellData().GetArray("Volume").GetValue(0) > 0, "the VTK wedge")
+wedge_exo = T.temp_path("wedge.exo")
+writer = spacetreemesh.stmExodusWriter()
+writer.SetInputData(wedge)
+writer.SetFileName(wedge_exo)
+writer.Write()
+exodus = vtkExodusIIReader()
+exodus.SetFileName(wedge_exo)
+exodus.UpdateInformation()
+exodus.SetObjectStatus(exodus.ELEM_BLOCK, 0, 1)
+exodus.Update()
+read_wedge = exodus.GetOutput().GetBlock(0).GetBlock(0)
+T.check_equal(read_wedge.GetCellType(0), VTK_WEDGE, "the Exodus wedge's type")
+# Exodus orders a wedge as Gmsh does (its side 4, the first triangle reversed, faces out), VTK's
+# reader takes the corners as they are: the file holds VTK's corners 0 2 1 3 5 4.
+corners = read_wedge.GetCell(0).GetPointIds()
+T.check_equal([read_wedge.GetPoint(corners.GetId(k)) for k in range(6)],
+              [wedge.GetPoint(k) for k in (0, 2, 1, 3, 5, 4)], "the Exodus wedge's corners")
+wedge_msh = T.temp_path("wedge.msh")
+writer = spacetreemesh.stmGmshWriter()
+writer.SetInputData(wedge)
+writer.SetFileName(wedge_msh)
+writer.Write()
+gmsh.initialize()
+gmsh.option.setNumber("General.Terminal", 0)
+gmsh.open(wedge_msh)
+element_types, element_tags, _ = gmsh.model.mesh.getElements(3)
+_, determinants, _ = gmsh.model.mesh.getJacobians(int(element_types[0]), [1.0 / 3, 1.0 / 3, 0.0])
+gmsh.finalize()
+T.check(len(determinants) == 1 and determinants[0] > 0,
+        "Gmsh finds the wedge's Jacobian %r" % list(determinants))
+
 # VTK-style: a mesh the formats cannot hold gets an error and leaves no file.
 polygons = vtkUnstructuredGrid()
 corners = vtkPoints()
@@ -120,7 +177,8 @@ for x in [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0.5, 1.5, 0)]:
     corners.InsertNextPoint(x)
 polygons.SetPoints(corners)
 polygons.InsertNextCell(VTK_POLYGON, 5, [0, 1, 2, 4, 3])
-for name in ("stmGmshWriter", "stmMeditWriter", "stmAbaqusWriter", "stmFEBioWriter"):
+for name in ("stmGmshWriter", "stmMeditWriter", "stmAbaqusWriter", "stmFEBioWriter",
+             "stmExodusWriter"):
     writer = getattr(spacetreemesh, name)()
     observer = T.ErrorCollector(writer)
     path = T.temp_path("polygons_" + name)
@@ -132,4 +190,4 @@ for name in ("stmGmshWriter", "stmMeditWriter", "stmAbaqusWriter", "stmFEBioWrit
     T.check(not os.path.exists(path) and not [f for f in os.listdir(os.path.dirname(path))
                                               if f.startswith("polygons_" + name)],
             "%s left a file behind" % name)
-print("writers: 4 formats read back by Gmsh, meshio and ElementTree")
+print("writers: 5 formats read back by Gmsh, meshio, ElementTree and VTK's Exodus reader")
