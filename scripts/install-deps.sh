@@ -26,6 +26,8 @@ packages=(
   mricron-data
   # independent readers of the finite-element exports in the tests: Gmsh and meshio
   gmsh python3-gmsh python3-meshio
+  # the visual quality report (stmesh --report, spacetreemesh.report): headless pictures
+  python3-matplotlib
   # offscreen GUI runs
   xvfb xauth
 )

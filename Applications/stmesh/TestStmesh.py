@@ -3167,6 +3167,77 @@ def case_error_export_options(c):
         c.run_failing([image] + arguments, code, text, output=c.path("x.msh"))
 
 
+def png_pixels(path):
+    """(width, height, distinct colours) of a PNG read by VTK's reader."""
+    from vtkmodules.vtkIOImage import vtkPNGReader
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    check(os.path.getsize(path) > 0, "%s is empty" % path)
+    reader = vtkPNGReader()
+    check(reader.CanReadFile(path), "%s is no PNG" % path)
+    reader.SetFileName(path)
+    reader.Update()
+    image = reader.GetOutput()
+    pixels = vtk_to_numpy(image.GetPointData().GetScalars())
+    width, height, _ = image.GetDimensions()
+    return width, height, len({tuple(pixel[:3]) for pixel in pixels[::7]})
+
+
+def case_report_directory(c):
+    # The ball with its inner box, every label its own material, to Gmsh with a report.
+    image, _ = write_label_image(c, "ball.nii", (16, 15, 14), ball)
+    table = c.path("names.txt")
+    with open(table, "w") as names_file:
+        names_file.write("1 Ball\n3 Inner_box\n")
+    output, report, summary_path = c.path("ball.msh"), c.path("report"), c.path("ball.json")
+    out, _ = c.run_ok([image, "--materials", "separate", "--label-names", table, "-o", output,
+                       "--report", report, "--summary", summary_path])
+    check("report:  %s/index.html" % report in out, "no report line")
+    summary = load_summary(summary_path)
+    check(stage(summary, "report")["seconds"] > 0, "no report stage in the summary")
+    copied = load_summary(os.path.join(report, "summary.json"))
+    check(copied["output"] == summary["output"] and
+          [s["name"] for s in copied["stages"]] == STAGES_ALL,
+          "the report's summary.json: stages %s" % [s["name"] for s in copied["stages"]])
+    # The mesh the report drew: the written one (as .vtu beside it, background left out).
+    mesh = read_mesh(os.path.join(report, "mesh.vtu"))
+    with open(os.path.join(report, "quality.json")) as quality_file:
+        quality = json.load(quality_file)
+    check(quality["all"]["elements"] == mesh["cells"] and
+          quality["all"]["measured_elements"] == mesh["cells"],
+          "quality.json counts %s, the mesh has %d cells" % (quality["all"]["elements"],
+                                                             mesh["cells"]))
+    per_material = count_by_material(mesh)
+    check({str(entry["material"]): entry["elements"] for entry in quality["materials"]} ==
+          per_material, "quality.json per material %s, the mesh's %s" %
+          ([(e["material"], e["elements"]) for e in quality["materials"]], per_material))
+    for entry in quality["materials"] + [quality["all"]]:
+        check(sum(entry["angle_histogram"]) == entry["measured_elements"] ==
+              sum(entry["condition_histogram"]), "histogram counts %s" % entry)
+    # vtkMeshQuality's figures against stmesh's own measures of the same cells.
+    check(abs(quality["all"]["max_condition_number"] - summary["quality"]["worst_condition"])
+          < 1e-6 and abs(quality["all"]["min_dihedral_angle"] -
+                         summary["quality"]["smallest_dihedral_degrees"]) < 0.01,
+          "report figures %s / %s, stmesh's %s" % (quality["all"]["max_condition_number"],
+                                                   quality["all"]["min_dihedral_angle"],
+                                                   summary["quality"]))
+    for picture, least_colours in (("quality_histograms.png", 3), ("cut.png", 4)):
+        width, height, colours = png_pixels(os.path.join(report, picture))
+        check(width >= 300 and height >= 300 and colours >= least_colours,
+              "%s: %d x %d pixels, %d colours" % (picture, width, height, colours))
+    with open(os.path.join(report, "index.html")) as page_file:
+        page = page_file.read()
+    for text in ('src="quality_histograms.png"', 'src="cut.png"', "Inner_box", "Ball",
+                 'href="summary.json"', "<td>smooth</td>"):
+        check(text in page, "index.html lacks %r" % text)
+    # The report needs a volume mesh, and a python3 that can make it.
+    c.run_failing([image, "--output-mode", "surface", "-o", c.path("s.vtp"), "--report",
+                   c.path("r2")], 2, "--report needs a volume mesh")
+    code, _, err = c.run([image, "-o", c.path("b.vtu"), "--report", c.path("r3")],
+                         env_changes={"STMESH_PYTHON": "/nonexistent/python3"})
+    check(code == 1 and "--report: /nonexistent/python3 -m spacetreemesh.report failed" in err,
+          "a missing python3: exit %d" % code)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--stmesh", required=True)

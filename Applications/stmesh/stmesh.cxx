@@ -92,6 +92,7 @@
 
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -186,6 +187,14 @@ Arguments:
                         and cell type; solids only). Default: the input's base name with .vtu (.vtp for a
                         surface), in the current directory.
   --msh-format F        ascii (the default, Gmsh's) or binary, for a .msh output.
+  --report DIR          also write a visual quality report into DIR (made if needed): the
+                        summary (summary.json), histograms of the minimum dihedral angle and of
+                        the condition number per material (quality_histograms.png), the mesh
+                        cut by the plane through its centre normal to z (cut.png), their
+                        figures (quality.json) and index.html showing them. Made by Debian's
+                        python3 with python3-matplotlib (python3 -m spacetreemesh.report); a
+                        mesh in a finite-element format is also written as DIR/mesh.vtu for it.
+                        Needs a volume mesh (not --output-mode surface).
   --background B        keep or drop the cells of Material 0 (the layer of background cells
                         around the body that the cut needs; the cut's outside) in the output.
                         Default: drop for the finite-element formats, keep for the VTK ones.
@@ -703,6 +712,7 @@ struct Options
   int Background = -1;            // --background: 1 keep, 0 drop, -1 the format's default
   bool MshFormatGiven = false;
   std::string LabelNames;        // --label-names: the label table's file, or empty
+  std::string ReportDirectory;   // --report: the visual report's directory, or empty
   std::string Pattern = "auto";  // normalised: lower case, no blanks
   int PatternCounts = 0;         // split counts per entry (2 or 3); 0 for auto
   std::vector<int> RootCellSize; // empty: automatic; else 2 or 3 sizes in voxels
@@ -1311,7 +1321,7 @@ Options ParseCommandLine(int argc, char* argv[])
       "--balance-label", "--balance-region", "--elements", "--templates", "--cell-template",
       "--boundary-layer", "--separating", "--output-mode", "--keep", "--iso", "--alpha", "--snap",
       "--smooth-iterations", "--smooth-method", "--merge", "--min-component-voxels", "--interfaces",
-      "--materials", "--thin-parts", "--msh-format", "--label-names", "--background" };
+      "--materials", "--thin-parts", "--msh-format", "--label-names", "--background", "--report" };
     if (valueOptions.count(name) == 0)
     {
       throw UsageError("unknown option '" + name + "'");
@@ -1498,6 +1508,14 @@ Options ParseCommandLine(int argc, char* argv[])
       }
       options.Background = value == "keep" ? 1 : 0;
     }
+    else if (name == "--report")
+    {
+      if (value.empty())
+      {
+        throw UsageError("--report needs a directory");
+      }
+      options.ReportDirectory = value;
+    }
     else if (name == "--label-names")
     {
       if (value.empty())
@@ -1650,6 +1668,11 @@ Options ParseCommandLine(int argc, char* argv[])
     throw UsageError("--label-names names the image's labels, but the cut makes the body of "
                      "several labels one material (Material 1); give --materials separate "
                      "(every label its own material) or one label with --labels");
+  }
+  if (!options.ReportDirectory.empty() && options.WritesSurface())
+  {
+    throw UsageError("--report needs a volume mesh, but --output-mode surface writes the cut's "
+                     "surface only");
   }
   if (options.MshFormatGiven && (options.Output.empty() || format != MeshFormat::Gmsh))
   {
@@ -4975,6 +4998,83 @@ void PrintStructureReport(const StructureReport& report)
   }
 }
 
+/// The package directories where python3 finds spacetreemesh.report: the build tree's and, for
+/// an installed stmesh, the one beside its bin directory.
+std::string ReportPythonPath()
+{
+  std::string path = STMESH_BUILD_PYTHON_PATH;
+  char executable[4096];
+  const ssize_t length = readlink("/proc/self/exe", executable, sizeof(executable) - 1);
+  if (length > 0)
+  {
+    executable[length] = '\0';
+    path += ":" + DirectoryName(DirectoryName(executable)) + "/" + STMESH_INSTALLED_PYTHON_SITE;
+  }
+  const char* existing = std::getenv("PYTHONPATH");
+  return existing && *existing ? path + ":" + existing : path;
+}
+
+/// The "report" stage (--report DIR): the summary and, for a finite-element output, the mesh as
+/// .vtu go into DIR, then python3 -m spacetreemesh.report draws the pictures and the page.
+void WriteReport(vtkPointSet* mesh, const std::string& output, MeshFormat format,
+  const Options& options, RunSummary& summary)
+{
+  const std::string& directory = options.ReportDirectory;
+  const Clock::time_point start = Clock::now();
+  if (mkdir(directory.c_str(), 0777) != 0 && errno != EEXIST)
+  {
+    throw Failure(
+      "--report: cannot make the directory '" + directory + "': " + std::strerror(errno));
+  }
+  std::string meshPath = output;
+  if (format != MeshFormat::XMLUnstructuredGrid && format != MeshFormat::LegacyVTK)
+  {
+    meshPath = directory + "/mesh.vtu";
+    StageReport ignored;
+    WriteMesh(mesh, meshPath, MeshFormat::XMLUnstructuredGrid, options.Compressor, false, ignored);
+  }
+  const std::string summaryPath = directory + "/summary.json";
+  WriteSummary(summaryPath, options, summary);
+  const char* chosen = std::getenv("STMESH_PYTHON");
+  const std::string python = chosen && *chosen ? chosen : "/usr/bin/python3";
+  const std::string pythonPath = ReportPythonPath();
+  std::vector<std::string> arguments = { python, "-m", "spacetreemesh.report", meshPath, directory,
+    "--summary", summaryPath, "--title", "stmesh: " + FileName(output) };
+  std::cout << "report:  " << python << " -m spacetreemesh.report " << meshPath << ' ' << directory
+            << std::endl;
+  const pid_t child = fork();
+  if (child == 0)
+  {
+    setenv("PYTHONPATH", pythonPath.c_str(), 1);
+    std::vector<char*> argv;
+    for (std::string& argument : arguments)
+    {
+      argv.push_back(&argument[0]);
+    }
+    argv.push_back(nullptr);
+    execv(argv[0], argv.data());
+    std::fprintf(
+      stderr, "stmesh: error: --report: cannot run %s: %s\n", argv[0], std::strerror(errno));
+    _exit(127);
+  }
+  int status = 0;
+  if (child < 0 || waitpid(child, &status, 0) != child || !WIFEXITED(status) ||
+    WEXITSTATUS(status) != 0)
+  {
+    throw Failure("--report: " + python +
+      " -m spacetreemesh.report failed (it needs Debian's "
+      "python3-paraview and python3-matplotlib; the mesh itself was written to '" +
+      output + "')");
+  }
+  StageReport report;
+  report.Name = "report";
+  report.Seconds = SecondsSince(start);
+  report.Description = directory + "/index.html";
+  summary.Stages.push_back(report);
+  std::cout << "report:  " << directory << "/index.html (" << std::fixed << std::setprecision(1)
+            << report.Seconds << " s)" << std::defaultfloat << '\n';
+}
+
 int Run(const Options& options)
 {
   RunSummary summary;
@@ -5270,6 +5370,10 @@ int Run(const Options& options)
     {
       PrintStructureReport(summary.Structure);
     }
+  }
+  if (!options.ReportDirectory.empty())
+  {
+    WriteReport(mesh, output, meshFormat, options, summary);
   }
   if (!options.SummaryPath.empty())
   {

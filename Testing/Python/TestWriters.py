@@ -6,6 +6,7 @@
   python3-gmsh, python3-meshio) and, for FEBio, ElementTree. Each has the mesh's points bit for
   bit, its element count, and per material (Material: 2 and 5 here) the same number of elements,
   in a group named from the label table (stmLabelTable on the mesh's field data).
+- spacetreemesh.report.write_report makes the visual report of a mesh in memory.
 - The wrapped classes used VTK-style: stmLabelTable reads an atlas's label file, a writer
   reports a clear error for a mesh of polygons and leaves no file behind.
 """
@@ -190,4 +191,15 @@ for name in ("stmGmshWriter", "stmMeditWriter", "stmAbaqusWriter", "stmFEBioWrit
     T.check(not os.path.exists(path) and not [f for f in os.listdir(os.path.dirname(path))
                                               if f.startswith("polygons_" + name)],
             "%s left a file behind" % name)
+# The visual report as a function (what stmesh --report runs): its figures count the mesh.
+from spacetreemesh import report  # noqa: E402
+report_directory = T.temp_path("report")
+figures = report.write_report(named_grid, report_directory, title="two boxes")
+T.check_equal({e["material"]: e["elements"] for e in figures["materials"]}, per_material,
+              "the report's elements per material")
+for name in ("index.html", "quality.json", "quality_histograms.png", "cut.png"):
+    T.check(os.path.getsize(os.path.join(report_directory, name)) > 0, "the report's %s" % name)
+with open(os.path.join(report_directory, "index.html")) as page:
+    T.check("Left box" in page.read(), "the report's page names the materials")
+
 print("writers: 5 formats read back by Gmsh, meshio, ElementTree and VTK's Exodus reader")
