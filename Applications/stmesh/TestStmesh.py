@@ -3238,6 +3238,32 @@ def case_report_directory(c):
           "a missing python3: exit %d" % code)
 
 
+def case_export_label_table_beside(c):
+    # An atlas's label table beside it (MRIcron: aal.nii.gz and aal.nii.txt) names the groups
+    # without --label-names; --label-names none ignores it; a malformed one only warns.
+    image, _ = write_label_image(c, "ball.nii", (16, 15, 14), ball)
+    with open(image + ".txt", "w") as names_file:
+        names_file.write("1 Ball\n3 Inner_box\n")
+    output = c.path("named.msh")
+    out, _ = c.run_ok([image, "--materials", "separate", "-o", output])
+    check("names:   %s.txt (2 labels, found beside the input" % image in out, "no names line")
+    check({tag: name for tag, (name, _) in gmsh_groups(output).items()} ==
+          {1: "Ball", 3: "Inner_box"}, "groups %s" % gmsh_groups(output))
+    unnamed = c.path("unnamed.msh")
+    out, _ = c.run_ok([image, "--materials", "separate", "--label-names", "none", "-o", unnamed])
+    check("names:" not in out and {name for name, _ in gmsh_groups(unnamed).values()} ==
+          {"Material_1", "Material_3"}, "--label-names none")
+    # The merged body (Material 1 for labels 1 and 3) is not named after label 1.
+    merged = c.path("merged.msh")
+    out, _ = c.run_ok([image, "-o", merged])
+    check("names:" not in out and {name for name, _ in gmsh_groups(merged).values()} ==
+          {"Material_1"}, "the merged body was named")
+    with open(image + ".txt", "w") as names_file:
+        names_file.write("1 Ball\none Box\n")
+    _, err = c.run_ok([image, "--materials", "separate", "-o", c.path("warned.msh")])
+    check("warning: the label table beside the input is ignored" in err, "no warning")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--stmesh", required=True)

@@ -198,11 +198,14 @@ Arguments:
   --background B        keep or drop the cells of Material 0 (the layer of background cells
                         around the body that the cut needs; the cut's outside) in the output.
                         Default: drop for the finite-element formats, keep for the VTK ones.
-  --label-names FILE    names of the labels, one "LABEL NAME" per line (MRIcron's .txt beside
+  --label-names FILE|none
+                        names of the labels, one "LABEL NAME" per line (MRIcron's .txt beside
                         an atlas, e.g. /usr/share/mricron/templates/aal.nii.txt; FreeSurfer's
                         colour tables; ITK-SNAP's label files, name in double quotes): they name
                         the material groups of the finite-element outputs and go into every
                         output mesh as the field data MaterialNames and MaterialNameLabels.
+                        Default: INPUT.txt (the .gz left out) if it exists, as beside MRIcron's
+                        atlases, when the materials are the labels; none: no names.
   --labels L1,L2,...|all
                         labels that form the body of interest. Default (or all): every
                         non-zero label.
@@ -766,6 +769,13 @@ struct Options
                                    : stmImageToSpacetree::THIN_BODY_PARTS;
   }
 };
+
+/// Whether the output's Material values are the image's labels (so that a label table names
+/// them): not when the cut makes a body of several labels one material.
+bool MaterialsAreLabels(const Options& options)
+{
+  return !(options.Cuts() && !options.SeparateMaterials && options.Labels.size() != 1);
+}
 
 // strtoll skips leading blanks and stops at the first non-digit, so "3x", " 3" or "" would slip
 // through; demand that the whole text is one decimal integer.
@@ -1662,8 +1672,7 @@ Options ParseCommandLine(int argc, char* argv[])
       "surface; " +
       extensions);
   }
-  if (!options.LabelNames.empty() && options.Cuts() && !options.SeparateMaterials &&
-    options.Labels.size() != 1)
+  if (!options.LabelNames.empty() && options.LabelNames != "none" && !MaterialsAreLabels(options))
   {
     throw UsageError("--label-names names the image's labels, but the cut makes the body of "
                      "several labels one material (Material 1); give --materials separate "
@@ -5107,11 +5116,32 @@ int Run(const Options& options)
   CheckReadableFile(input);
   // The label table is read first, so that a bad one fails before the meshing.
   vtkNew<stmLabelTable> labelTable;
-  if (!options.LabelNames.empty())
+  if (!options.LabelNames.empty() && options.LabelNames != "none")
   {
     if (!labelTable->ReadFile(options.LabelNames.c_str()))
     {
       throw Failure(std::string("--label-names: ") + labelTable->GetLastError());
+    }
+  }
+  else if (options.LabelNames.empty() && MaterialsAreLabels(options))
+  {
+    // An atlas's label table beside it, as MRIcron ships them (aal.nii.gz: aal.nii.txt).
+    std::string beside =
+      EndsWith(ToLower(input), ".gz") ? input.substr(0, input.size() - 3) : input;
+    beside += ".txt";
+    if (access(beside.c_str(), R_OK) == 0)
+    {
+      if (labelTable->ReadFile(beside.c_str()))
+      {
+        std::cout << "names:   " << beside << " (" << labelTable->GetNumberOfLabels()
+                  << " labels, found beside the input; --label-names none ignores it)\n";
+      }
+      else
+      {
+        Diagnostics() << "stmesh: warning: the label table beside the input is ignored: "
+                      << labelTable->GetLastError() << '\n';
+        labelTable->RemoveAllLabels();
+      }
     }
   }
   if (options.ReachesSnap() && options.Separating.Kind == SeparatingKind::Gray)
