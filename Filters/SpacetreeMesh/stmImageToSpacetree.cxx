@@ -642,6 +642,17 @@ int stmImageToSpacetree::RequestData(
       geometry.AxisVectors[axis][c] = direction[3 * c + axis] * spacing[axis];
     }
   }
+  // The first voxel has the extent's first index, not 0, in an image that is part of a larger
+  // one (ExtractSubset's VOI, a streamed piece): the lattice starts at that voxel.
+  int extent[6];
+  input->GetExtent(extent);
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      geometry.Origin[c] += extent[2 * axis] * geometry.AxisVectors[axis][c];
+    }
+  }
   if (!cellLabels)
   {
     // A point-data voxel is centred on its point: the lattice starts half a voxel before it

@@ -65,6 +65,14 @@ bool stmSurfaceFunction::SetGrayImage(
   this->Field =
     stm::VoxelField<3, double>{ { this->Dimensions[0], this->Dimensions[1], this->Dimensions[2] },
       this->Gray.data(), outside };
+  // The physical-to-index matrix gives the index in the whole image; the samples start at the
+  // extent's first index.
+  int extent[6];
+  image->GetExtent(extent);
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    this->ExtentStart[axis] = extent[2 * axis];
+  }
   vtkMatrix4x4* matrix = image->GetPhysicalToIndexMatrix();
   for (int r = 0; r < 3; ++r)
   {
@@ -81,7 +89,8 @@ void stmSurfaceFunction::VoxelPosition(const double x[3], double position[3]) co
   for (int axis = 0; axis < 3; ++axis)
   {
     const double* row = this->PhysicalToIndex[axis];
-    const double index = row[0] * x[0] + row[1] * x[1] + row[2] * x[2] + row[3];
+    const double index =
+      row[0] * x[0] + row[1] * x[1] + row[2] * x[2] + row[3] - this->ExtentStart[axis];
     position[axis] = this->Dimensions[axis] == 1 ? 0.5 : index + 0.5;
   }
 }

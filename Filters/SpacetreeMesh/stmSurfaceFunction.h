@@ -55,6 +55,7 @@ private:
   std::vector<double> Gray; // signed: f at the voxels
   stm::VoxelField<3, double> Field;
   int Dimensions[3] = { 0, 0, 0 };
+  int ExtentStart[3] = { 0, 0, 0 }; // the image's first index per axis (a sub-extent)
   double PhysicalToIndex[3][4] = {};
 };
 
