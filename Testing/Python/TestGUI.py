@@ -8,7 +8,8 @@ import os
 
 from paraview.simple import (ColorBy, GetActiveViewOrCreate, LoadPlugin, OpenDataFile, Render,
                              SaveScreenshot, Show)
-from vtkmodules.vtkIOImage import vtkPNGReader
+
+import stmtesting as T
 
 LoadPlugin(os.environ["STM_PLUGIN"], ns=globals())
 image = OpenDataFile(os.environ["STM_AAL"])
@@ -41,16 +42,9 @@ screenshot = os.path.join(os.environ["STM_TEMP_DIR"], "gui_aal_mesh.png")
 SaveScreenshot(screenshot, view, ImageResolution=[800, 600])
 
 # Not blank: the mesh covers a good part of the picture in many colours.
-reader = vtkPNGReader()
-reader.SetFileName(screenshot)
-reader.Update()
-pixels = reader.GetOutput().GetPointData().GetScalars()
-background = pixels.GetTuple(0)
-covered = sum(1 for i in range(0, pixels.GetNumberOfTuples(), 7) if pixels.GetTuple(i) != background)
-colours = {pixels.GetTuple(i) for i in range(0, pixels.GetNumberOfTuples(), 7)}
-fraction = covered / (pixels.GetNumberOfTuples() / 7)
+fraction, colours = T.screenshot_coverage(screenshot)
 assert fraction > 0.1, "screenshot nearly blank: %.3f of pixels differ from the background" % fraction
-assert len(colours) > 50, "screenshot has only %d colours" % len(colours)
-print("GUI: %d tetrahedra, screenshot %s (%.0f%% covered, %d colours)" % (cells, screenshot, 100 * fraction, len(colours)))
+assert colours > 50, "screenshot has only %d colours" % colours
+print("GUI: %d tetrahedra, screenshot %s (%.0f%% covered, %d colours)" % (cells, screenshot, 100 * fraction, colours))
 with open(os.environ["STM_GUI_MARKER"], "w") as marker:
     marker.write("ok\n")

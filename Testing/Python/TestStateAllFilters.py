@@ -8,7 +8,8 @@ import os
 
 from paraview.simple import GetActiveViewOrCreate, GetSources, LoadPlugin, LoadState, Render
 from paraview.simple import SaveScreenshot
-from vtkmodules.vtkIOImage import vtkPNGReader
+
+import stmtesting as T
 
 LoadPlugin(os.environ["STM_PLUGIN"], ns=globals())
 LoadState(os.environ["STM_STATE"])
@@ -65,13 +66,7 @@ view.ResetCamera(False)
 Render(view)
 screenshot = os.path.join(os.environ["STM_TEMP_DIR"], "gui_state.png")
 SaveScreenshot(screenshot, view, ImageResolution=[800, 600])
-reader = vtkPNGReader()
-reader.SetFileName(screenshot)
-reader.Update()
-pixels = reader.GetOutput().GetPointData().GetScalars()
-background = pixels.GetTuple(0)
-covered = sum(1 for i in range(0, pixels.GetNumberOfTuples(), 7) if pixels.GetTuple(i) != background)
-fraction = covered / (pixels.GetNumberOfTuples() / 7)
+fraction, _ = T.screenshot_coverage(screenshot)
 assert fraction > 0.05, "screenshot nearly blank: %.3f of pixels differ from the background" % fraction
 print("GUI state: %d pipeline objects ran, screenshot %s (%.0f%% covered)"
       % (sum(expected.values()), screenshot, 100 * fraction))

@@ -311,6 +311,23 @@ def max_level_difference(lo, hi, levels, face_only=False):
 
 
 # ------------------------------------------------------------------------------------------------
+# Screenshots
+
+def screenshot_coverage(path):
+    """(the share of pixels that differ from the corner pixel's colour, the distinct colours) of
+    a PNG screenshot, over every seventh pixel: a blank picture gives (0, 1)."""
+    from vtkmodules.vtkIOImage import vtkPNGReader
+    reader = vtkPNGReader()
+    reader.SetFileName(path)
+    reader.Update()
+    pixels = reader.GetOutput().GetPointData().GetScalars()
+    sample = [pixels.GetTuple(i) for i in range(0, pixels.GetNumberOfTuples(), 7)]
+    background = pixels.GetTuple(0)
+    covered = sum(1 for pixel in sample if pixel != background)
+    return covered / len(sample), len(set(sample))
+
+
+# ------------------------------------------------------------------------------------------------
 # Events
 
 class ErrorCollector:
