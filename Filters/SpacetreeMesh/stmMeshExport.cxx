@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "stmMeshExport.h"
 
+#include "stmCutInput.h"
 #include "stmLabelTable.h"
 #include "stmSMPExecutor.h"
 
@@ -44,37 +45,32 @@ namespace
 /// several shapes are named "<name>_<type>" (FEBioElementType), others the group's name. Nodes in
 /// point order (no node map needed), the element map the cell ids + 1 in block order.
 template <class IdType>
-bool WriteExodus(const stm::ExportMesh<IdType>& mesh, const stm::ExportBlocks& blocks,
-  const std::string& path, std::string& error)
+stm::Status WriteExodus(
+  const stm::ExportMesh<IdType>& mesh, const stm::ExportBlocks& blocks, const std::string& path)
 {
-  if (blocks.Dimension == 2)
+  const stm::Status solids = stm::SolidsOnly(blocks, "Exodus", "TETRA, PYRAMID, WEDGE, HEX8");
+  if (!solids.IsOk())
   {
-    error = "the Exodus export writes solid element blocks, but the mesh is planar (triangles "
-            "or quads); export it to Gmsh or Medit";
-    return false;
+    return solids;
   }
   if (mesh.NumberOfPoints >= std::numeric_limits<int>::max() ||
     mesh.NumberOfCells >= std::numeric_limits<int>::max())
   {
-    error = "the mesh is too large for the Exodus export's 32-bit ids";
-    return false;
+    return stm::Status::Invalid("the mesh is too large for the Exodus export's 32-bit ids");
   }
   std::int64_t nextId = 1;
-  std::vector<int> shapesPerGroup(blocks.Groups.size(), 0);
+  std::vector<std::string> groupNames;
   for (const stm::MaterialGroup& group : blocks.Groups)
   {
     nextId = std::max(nextId, group.Tag + 1);
+    groupNames.push_back(group.Name);
   }
-  for (const stm::ExportBlock& block : blocks.Blocks)
-  {
-    ++shapesPerGroup[block.Group];
-  }
+  std::vector<std::string> names = stm::BlockNames(blocks, groupNames);
   int computeWordSize = 8, ioWordSize = 8;
   const int file = ex_create(path.c_str(), EX_CLOBBER | EX_NETCDF4, &computeWordSize, &ioWordSize);
   if (file < 0)
   {
-    error = "cannot create the Exodus file";
-    return false;
+    return stm::Status::Invalid("cannot create the Exodus file");
   }
   bool ok = ex_put_init(file, "SpacetreeMesh", 3, mesh.NumberOfPoints, mesh.NumberOfCells,
               static_cast<std::int64_t>(blocks.Blocks.size()), 0, 0) >= 0;
@@ -82,16 +78,11 @@ bool WriteExodus(const stm::ExportMesh<IdType>& mesh, const stm::ExportBlocks& b
   // written so far each time a definition is added (the AAL atlas: 14 s against 1 s).
   std::vector<char> groupStarted(blocks.Groups.size(), 0);
   std::vector<std::int64_t> blockIds;
-  std::vector<std::string> names;
   for (const stm::ExportBlock& block : blocks.Blocks)
   {
-    const stm::MaterialGroup& group = blocks.Groups[block.Group];
-    const std::int64_t id = groupStarted[block.Group] ? nextId++ : group.Tag;
+    const std::int64_t id = groupStarted[block.Group] ? nextId++ : blocks.Groups[block.Group].Tag;
     groupStarted[block.Group] = 1;
     blockIds.push_back(id);
-    names.push_back(shapesPerGroup[block.Group] > 1
-        ? group.Name + "_" + stm::FEBioElementType(block.Shape)
-        : group.Name);
     const auto shape = static_cast<stm::ElementShape>(block.Shape);
     const char* type = shape == stm::ElementShape::Tetra ? "TETRA"
       : shape == stm::ElementShape::Pyramid              ? "PYRAMID"
@@ -158,11 +149,8 @@ bool WriteExodus(const stm::ExportMesh<IdType>& mesh, const stm::ExportBlocks& b
   }
   ok = ok && (elementMap.empty() || ex_put_id_map(file, EX_ELEM_MAP, elementMap.data()) >= 0);
   ok = ex_close(file) >= 0 && ok;
-  if (!ok)
-  {
-    error = "the Exodus library failed to write the file (disk full?)";
-  }
-  return ok;
+  return ok ? stm::Status::Ok()
+            : stm::Status::Invalid("the Exodus library failed to write the file (disk full?)");
 }
 
 template <class IdType>
@@ -181,15 +169,9 @@ bool WriteTyped(stmSMPExecutor& executor, const stm::ExportMesh<IdType>& mesh,
   const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
   if (format == Format::Exodus)
   {
-    if (!WriteExodus(mesh, blocks, temporary, error) ||
-      std::rename(temporary.c_str(), path.c_str()) != 0)
-    {
-      std::remove(temporary.c_str());
-      error = error.empty() ? "cannot rename '" + temporary + "' to '" + path + "'" : error;
-      return false;
-    }
-    return true;
+    status = WriteExodus(mesh, blocks, temporary);
   }
+  else
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     if (!out)
@@ -197,7 +179,7 @@ bool WriteTyped(stmSMPExecutor& executor, const stm::ExportMesh<IdType>& mesh,
       error = "cannot open '" + temporary + "' for writing";
       return false;
     }
-    switch (format)
+    switch (format) // Exodus is written above
     {
       case Format::GmshAscii:
       case Format::GmshBinary:
@@ -290,15 +272,7 @@ bool Write(vtkAlgorithm* writer, vtkUnstructuredGrid* input, const std::string& 
       error = "the cell array '" + materialArray + "' must hold one integer label per cell";
       return false;
     }
-    materials.resize(static_cast<std::size_t>(cells));
-    vtkSMPTools::For(0, cells,
-      [&](vtkIdType begin, vtkIdType end)
-      {
-        for (vtkIdType c = begin; c < end; ++c)
-        {
-          materials[c] = static_cast<std::int64_t>(labels->GetComponent(c, 0));
-        }
-      });
+    materials = stmCutInput::CellMaterials(input, materialArray.c_str());
   }
   vtkCellArray* cellArray = input->GetCells();
   vtkUnsignedCharArray* types = input->GetCellTypesArray();

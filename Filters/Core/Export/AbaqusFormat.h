@@ -19,10 +19,10 @@ template <class IdType, class Executor>
 Status WriteAbaqus(
   std::ostream& out, const ExportMesh<IdType>& mesh, const ExportBlocks& blocks, Executor& executor)
 {
-  if (blocks.Dimension == 2)
+  const Status solids = SolidsOnly(blocks, "Abaqus", "C3D4, C3D6, C3D8");
+  if (!solids.IsOk())
   {
-    return Status::Invalid("the Abaqus export writes solid elements (C3D4, C3D6, C3D8), but the "
-                           "mesh is planar (triangles or quads); export it to Gmsh or Medit");
+    return solids;
   }
   const std::vector<std::string> names = UniqueWordNames(blocks.Groups);
   TextChunk head;

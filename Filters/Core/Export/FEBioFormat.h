@@ -14,24 +14,6 @@
 namespace stm
 {
 
-/// FEBio's element type of a solid shape.
-inline const char* FEBioElementType(std::uint8_t shape)
-{
-  switch (static_cast<ElementShape>(shape))
-  {
-    case ElementShape::Tetra:
-      return "tet4";
-    case ElementShape::Pyramid:
-      return "pyra5";
-    case ElementShape::Wedge:
-      return "penta6";
-    case ElementShape::Hexahedron:
-      return "hex8";
-    default:
-      return "";
-  }
-}
-
 /// Text for an XML attribute value.
 inline std::string XMLEscaped(const std::string& text)
 {
@@ -63,24 +45,13 @@ template <class IdType, class Executor>
 Status WriteFEBio(
   std::ostream& out, const ExportMesh<IdType>& mesh, const ExportBlocks& blocks, Executor& executor)
 {
-  if (blocks.Dimension == 2)
+  const Status solids = SolidsOnly(blocks, "FEBio", "tet4, pyra5, penta6, hex8");
+  if (!solids.IsOk())
   {
-    return Status::Invalid("the FEBio export writes solid elements (tet4, pyra5, penta6, hex8), "
-                           "but the mesh is planar (triangles or quads); export it to Gmsh or "
-                           "Medit");
+    return solids;
   }
   const std::vector<std::string> names = UniqueWordNames(blocks.Groups);
-  std::vector<int> shapesPerGroup(blocks.Groups.size(), 0);
-  for (const ExportBlock& block : blocks.Blocks)
-  {
-    ++shapesPerGroup[block.Group];
-  }
-  std::vector<std::string> parts;
-  for (const ExportBlock& block : blocks.Blocks)
-  {
-    parts.push_back(names[block.Group] +
-      (shapesPerGroup[block.Group] > 1 ? std::string("_") + FEBioElementType(block.Shape) : ""));
-  }
+  const std::vector<std::string> parts = BlockNames(blocks, names);
   TextChunk head;
   head.Put("<?xml version=\"1.0\" encoding=\"ISO-8859-1\"?>\n<febio_spec version=\"4.0\">\n");
   head.Put("\t<Module type=\"solid\"/>\n\t<Material>\n");

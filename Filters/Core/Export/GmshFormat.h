@@ -94,19 +94,18 @@ Status WriteGmsh(std::ostream& out, const ExportMesh<IdType>& mesh, const Export
       }
     }
   }
+  // The four size_t counts that open the entities, nodes and elements sections: raw, or one line.
+  auto putCounts = [binary](TextChunk& text, const SizeT(&counts)[4])
+  {
+    for (int i = 0; i < 4; ++i)
+    {
+      binary ? (void)text.Raw(counts[i])
+             : (void)text.Put(static_cast<std::int64_t>(counts[i])).Put(i < 3 ? ' ' : '\n');
+    }
+  };
   SizeT counts[4] = { 0, 0, 0, 0 };
   counts[dimension] = static_cast<SizeT>(groups);
-  for (int d = 0; d < 4; ++d)
-  {
-    if (binary)
-    {
-      head.Raw(counts[d]);
-    }
-    else
-    {
-      head.Put(static_cast<std::int64_t>(counts[d])).Put(d < 3 ? ' ' : '\n');
-    }
-  }
+  putCounts(head, counts);
   for (std::int64_t g = 0; g < groups; ++g)
   {
     const double* box = boxes.data() + 6 * g;
@@ -139,11 +138,7 @@ Status WriteGmsh(std::ostream& out, const ExportMesh<IdType>& mesh, const Export
   const auto blocksOfNodes = static_cast<SizeT>(points > 0 ? 1 : 0);
   const SizeT nodeRange[4] = { blocksOfNodes, static_cast<SizeT>(points),
     static_cast<SizeT>(points > 0 ? 1 : 0), static_cast<SizeT>(points) };
-  for (int i = 0; i < 4; ++i)
-  {
-    binary ? (void)head.Raw(nodeRange[i])
-           : (void)head.Put(static_cast<std::int64_t>(nodeRange[i])).Put(i < 3 ? ' ' : '\n');
-  }
+  putCounts(head, nodeRange);
   if (points > 0)
   {
     // The nodes sit on the first entity: Gmsh needs every node on one, not on the entity of
@@ -203,11 +198,7 @@ Status WriteGmsh(std::ostream& out, const ExportMesh<IdType>& mesh, const Export
   const std::int64_t cells = mesh.NumberOfCells;
   const SizeT elementRange[4] = { static_cast<SizeT>(blocks.Blocks.size()),
     static_cast<SizeT>(cells), static_cast<SizeT>(cells > 0 ? 1 : 0), static_cast<SizeT>(cells) };
-  for (int i = 0; i < 4; ++i)
-  {
-    binary ? (void)middle.Raw(elementRange[i])
-           : (void)middle.Put(static_cast<std::int64_t>(elementRange[i])).Put(i < 3 ? ' ' : '\n');
-  }
+  putCounts(middle, elementRange);
   out.write(middle.Text.data(), static_cast<std::streamsize>(middle.Text.size()));
   for (const ExportBlock& block : blocks.Blocks)
   {

@@ -132,6 +132,25 @@ struct ExportBlocks
   int Dimension = 0; // of the cells: 2 or 3 (0 without cells)
 };
 
+/// FEBio's element type of a solid shape; also the suffix of the block names of a material of
+/// several shapes (BlockNames).
+inline const char* FEBioElementType(std::uint8_t shape)
+{
+  switch (static_cast<ElementShape>(shape))
+  {
+    case ElementShape::Tetra:
+      return "tet4";
+    case ElementShape::Pyramid:
+      return "pyra5";
+    case ElementShape::Wedge:
+      return "penta6";
+    case ElementShape::Hexahedron:
+      return "hex8";
+    default:
+      return "";
+  }
+}
+
 /// Checks the mesh (shapes, corner counts, point ids, finite coordinates; cells of one
 /// dimension) and makes its groups and blocks. `names` may name any labels, present or not.
 template <class IdType>
@@ -256,6 +275,37 @@ Status MakeExportBlocks(
     blocks.Cells[starts[cellKeys[c]]++] = c;
   }
   return Status::Ok();
+}
+
+/// The refusal of a format that holds solid elements only (`elements` lists its types) for a
+/// planar mesh; Ok for solids.
+inline Status SolidsOnly(const ExportBlocks& blocks, const char* format, const char* elements)
+{
+  if (blocks.Dimension != 2)
+  {
+    return Status::Ok();
+  }
+  return Status::Invalid(std::string("the ") + format + " export writes solid elements (" +
+    elements + "), but the mesh is planar (triangles or quads); export it to Gmsh or Medit");
+}
+
+/// A name per block: its group's entry of groupNames, with "_" and the shape's FEBio type
+/// appended when the group has blocks of several shapes (FEBio's parts, Exodus's blocks).
+inline std::vector<std::string> BlockNames(
+  const ExportBlocks& blocks, const std::vector<std::string>& groupNames)
+{
+  std::vector<int> shapesPerGroup(blocks.Groups.size(), 0);
+  for (const ExportBlock& block : blocks.Blocks)
+  {
+    ++shapesPerGroup[block.Group];
+  }
+  std::vector<std::string> names;
+  for (const ExportBlock& block : blocks.Blocks)
+  {
+    names.push_back(groupNames[block.Group] +
+      (shapesPerGroup[block.Group] > 1 ? std::string("_") + FEBioElementType(block.Shape) : ""));
+  }
+  return names;
 }
 
 /// Appends numbers and text to a string: integers exactly, doubles in the shortest form that
