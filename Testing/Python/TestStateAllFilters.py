@@ -1,8 +1,8 @@
 """A saved ParaView state that uses every filter of the plugin (Testing/Data/AllFilters.pvsm, on
-a block of the AAL atlas cut out by ExtractSubset), loaded by pvpython under Xvfb: every pipeline
+a block of the AAL atlas cut out by ExtractSubset), loaded under Xvfb by pvpython
+(python.state_all_filters) and by the GUI (python.gui_state, RunGUITest.sh): every pipeline
 object comes back and runs, each output is what its filter makes, and a screenshot of the
-state's view shows the meshes. It also writes the marker file STM_GUI_MARKER, so that
-RunGUITest.sh can run it in the GUI (where LoadState of this state does not return yet).
+state's view shows the meshes. Success writes the marker file STM_GUI_MARKER.
 """
 import os
 
