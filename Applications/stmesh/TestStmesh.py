@@ -1602,6 +1602,14 @@ def option_value(arguments, name, default):
     return arguments[arguments.index(name) + 1] if name in arguments else default
 
 
+def plain_run(c, image, name, arguments):
+    """stmesh IMAGE -o NAME.vtu --summary NAME.json ARGUMENTS: the summary and the read-back
+    mesh (read_cut), for runs that cut_run's binary checks do not fit (several materials)."""
+    output, summary_path = c.path(name + ".vtu"), c.path(name + ".json")
+    c.run_ok([image, "-o", output, "--summary", summary_path] + arguments)
+    return load_summary(summary_path), read_cut(output)
+
+
 def cut_run(c, image, name, arguments, inside=1, extension=".vtu"):
     """stmesh IMAGE -o NAME.vtu --summary NAME.json ARGUMENTS with a cut stage (volume output):
     the summary, its tessellate and cut stages, the read-back mesh, stdout and stderr, after
@@ -1724,13 +1732,22 @@ def case_cut_default(c):
     body = sum(voxels.values())
     check(0.75 * body < inside < 1.1 * body,
           "the inside measures %r, the body's voxels %d" % (inside, body))
-    # One label selected: it is the inside Material; several: 1.
+    # One label selected: it is the inside Material; several merged: 1; several without
+    # --materials: each its own material, as --materials separate makes them.
     _, _, _, single, _, _ = cut_run(c, image, "label3", ["--labels", "3"], inside=3)
     check(set(single["materials"]) == {3, 0}, "--labels 3: Material values %s" %
           sorted(set(single["materials"])))
-    _, _, _, both, _, _ = cut_run(c, image, "labels13", ["--labels", "3,1"])
-    check(set(both["materials"]) == {1, 0}, "--labels 3,1: Material values %s" %
-          sorted(set(both["materials"])))
+    _, _, _, both, _, _ = cut_run(c, image, "labels13", ["--labels", "3,1", "--materials",
+                                                         "merged"])
+    check(set(both["materials"]) == {1, 0}, "--labels 3,1 --materials merged: Material values %s"
+          % sorted(set(both["materials"])))
+    summary, several = plain_run(c, image, "labels13_separate", ["--labels", "3,1"])
+    _, separate = plain_run(c, image, "labels13_explicit",
+                            ["--labels", "3,1", "--materials", "separate"])
+    check(summary["parameters"]["materials"] == "separate" and several == separate,
+          "--labels 3,1 is not --materials separate: %s" % summary["parameters"]["materials"])
+    check({1, 3} <= set(several["materials"]), "--labels 3,1: Material values %s" %
+          sorted(set(several["materials"])))
     # Legacy VTK output and an explicit --stop-after smooth give the same mesh.
     _, _, _, legacy, _, _ = cut_run(c, image, "legacy", ["--stop-after", "smooth"],
                                     extension=".vtk")
@@ -2522,14 +2539,23 @@ def case_option_labels_all(c):
           "bad default labels %s" % results["default"][0])
     check(results["all"] == results["default"] == results["all_inline"],
           "--labels all differs from the default: %s" % results)
-    # The same in the default pipeline, with its cut.
+    # With the cut, the default body is one material, and --labels all asks for every label as
+    # a material: --materials separate (the atlas's regions in an FE export).
     ball_image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
     default, _, _, default_mesh, _, _ = cut_run(c, ball_image, "cut_default", [])
-    explicit, _, _, explicit_mesh, _, _ = cut_run(c, ball_image, "cut_all", ["--labels", "all"])
-    check(explicit["parameters"] == default["parameters"], "--labels all: parameters %s" %
+    check(default["parameters"]["materials"] == "merged", "default materials %s" %
+          default["parameters"]["materials"])
+    explicit, explicit_mesh = plain_run(c, image, "cut_all", ["--labels", "all"])
+    separate, separate_mesh = plain_run(c, image, "cut_separate", ["--materials", "separate"])
+    check(explicit["parameters"] == separate["parameters"], "--labels all: parameters %s" %
           explicit["parameters"])
-    check(explicit_mesh["cells"] == default_mesh["cells"], "--labels all: %d cells, default %d" %
-          (explicit_mesh["cells"], default_mesh["cells"]))
+    check(explicit_mesh == separate_mesh, "--labels all: %d cells, --materials separate %d" %
+          (explicit_mesh["cells"], separate_mesh["cells"]))
+    merged, _, _, merged_mesh, _, _ = cut_run(c, image, "cut_merged", ["--labels", "all",
+                                                                       "--materials", "merged"])
+    check(merged["parameters"]["materials"] == "merged" and
+          set(merged_mesh["materials"]) <= {0, 1}, "--labels all --materials merged: %s" %
+          sorted(set(merged_mesh["materials"])))
     # "all" is a whole value, not a list entry.
     c.run_failing([image, "-o", c.path("x.vtu"), "--labels", "all,2"], 2, "--labels",
                   output=c.path("x.vtu"))

@@ -208,9 +208,12 @@ Arguments:
                         atlases, when the materials are the labels; none: no names.
   --labels L1,L2,...|all
                         labels that form the body of interest. Default (or all): every
-                        non-zero label.
-  --materials M         what the cut stage makes of the body's labels: merged (the default:
-                        one body, the binary cut) or separate (every label its own material,
+                        non-zero label. Several labels, or all, given here are meshed as
+                        materials (--materials separate) unless --materials merged, another
+                        --separating, --output-mode surface, --keep or --iso is given.
+  --materials M         what the cut stage makes of the body's labels: merged (the default
+                        without --labels: one body, the binary cut) or separate (the default
+                        with several --labels or all: every label its own material,
                         cut at the interfaces between them with conforming triple lines and
                         quadruple points; needs --separating labels; the cut stage snaps by
                         the quality rule before each material unless --snap none; --output-mode
@@ -739,8 +742,10 @@ struct Options
   std::vector<std::string> SmoothOnlyOptions;     // --smooth-iterations, --smooth-method if given
   bool SeparatingGiven = false;
   bool StopAfterGiven = false;
-  bool SeparateMaterials = false; // --materials separate
-  bool RefineThinParts = true;    // --thin-parts refine
+  bool SeparateMaterials = false; // --materials separate, or several --labels (see below)
+  bool MaterialsGiven = false;
+  bool LabelsGiven = false;
+  bool RefineThinParts = true; // --thin-parts refine
   bool ThinPartsGiven = false;
 
   /// Whether the run reaches the snap stage (it may still skip it: --snap none), the cut stage
@@ -1360,6 +1365,7 @@ Options ParseCommandLine(int argc, char* argv[])
     else if (name == "--labels")
     {
       options.Labels = ParseLabels(value);
+      options.LabelsGiven = true;
     }
     else if (name == "--merge")
     {
@@ -1457,6 +1463,7 @@ Options ParseCommandLine(int argc, char* argv[])
         throw UsageError("--materials: '" + value + "' is not one of merged, separate");
       }
       options.SeparateMaterials = value == "separate";
+      options.MaterialsGiven = true;
     }
     else if (name == "--snap")
     {
@@ -1635,6 +1642,20 @@ Options ParseCommandLine(int argc, char* argv[])
       ": cutting at the separating function (--separating " + options.Separating.Text +
       ") needs simplicial elements; give --separating none for a " +
       KeywordName(options.Elements, ElementKinds) + " mesh of the voxels");
+  }
+
+  // Naming several labels, or all, asks for them as materials, as an atlas meshed for a solver
+  // needs: the cut keeps each label its own material unless --materials says otherwise or the
+  // run is one that the multi-material cut does not make (another separating function, a
+  // surface, --keep or --iso). The default body, no --labels, stays one body (the brain mask).
+  const bool onlyVolumeOutputMode =
+    std::all_of(options.CutOnlyOptions.begin(), options.CutOnlyOptions.end(),
+      [&options](const std::string& name)
+      { return name == "--output-mode" && options.OutputMode == stmMarchingSimplices::VOLUME; });
+  if (!options.MaterialsGiven && options.LabelsGiven && options.Labels.size() != 1 &&
+    options.Cuts() && options.Separating.Kind == SeparatingKind::Labels && onlyVolumeOutputMode)
+  {
+    options.SeparateMaterials = true;
   }
 
   if (options.SeparateMaterials && options.Cuts())
