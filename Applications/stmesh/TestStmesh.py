@@ -2542,7 +2542,7 @@ def case_option_labels_all(c):
     # With the cut, the default body is one material, and --labels all asks for every label as
     # a material: --materials separate (the atlas's regions in an FE export).
     ball_image, _ = write_label_image(c, "ball.vti", (16, 15, 14), ball)
-    default, _, _, default_mesh, _, _ = cut_run(c, ball_image, "cut_default", [])
+    default, _, _, _, _, _ = cut_run(c, ball_image, "cut_default", [])
     check(default["parameters"]["materials"] == "merged", "default materials %s" %
           default["parameters"]["materials"])
     explicit, explicit_mesh = plain_run(c, image, "cut_all", ["--labels", "all"])

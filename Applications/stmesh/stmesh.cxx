@@ -775,6 +775,20 @@ struct Options
   }
 };
 
+/// The first cut option given that applies to one body only (--keep, --iso, --output-mode
+/// surface), which the multi-material cut does not make; nullptr if there is none.
+const std::string* FirstSingleBodyCutOption(const Options& options)
+{
+  for (const std::string& name : options.CutOnlyOptions)
+  {
+    if (name != "--output-mode" || options.OutputMode != stmMarchingSimplices::VOLUME)
+    {
+      return &name;
+    }
+  }
+  return nullptr;
+}
+
 /// Whether the output's Material values are the image's labels (so that a label table names
 /// them): not when the cut makes a body of several labels one material.
 bool MaterialsAreLabels(const Options& options)
@@ -1648,12 +1662,9 @@ Options ParseCommandLine(int argc, char* argv[])
   // needs: the cut keeps each label its own material unless --materials says otherwise or the
   // run is one that the multi-material cut does not make (another separating function, a
   // surface, --keep or --iso). The default body, no --labels, stays one body (the brain mask).
-  const bool onlyVolumeOutputMode =
-    std::all_of(options.CutOnlyOptions.begin(), options.CutOnlyOptions.end(),
-      [&options](const std::string& name)
-      { return name == "--output-mode" && options.OutputMode == stmMarchingSimplices::VOLUME; });
   if (!options.MaterialsGiven && options.LabelsGiven && options.Labels.size() != 1 &&
-    options.Cuts() && options.Separating.Kind == SeparatingKind::Labels && onlyVolumeOutputMode)
+    options.Cuts() && options.Separating.Kind == SeparatingKind::Labels &&
+    !FirstSingleBodyCutOption(options))
   {
     options.SeparateMaterials = true;
   }
@@ -1666,14 +1677,11 @@ Options ParseCommandLine(int argc, char* argv[])
                        "--separating is " +
         options.Separating.Text + "; give --separating labels (the default)");
     }
-    for (const std::string& name : options.CutOnlyOptions)
+    if (const std::string* name = FirstSingleBodyCutOption(options))
     {
-      if (name != "--output-mode" || options.OutputMode != stmMarchingSimplices::VOLUME)
-      {
-        throw UsageError(name +
-          " applies to one body, not to --materials separate; write the "
-          "interfaces between the materials with --interfaces");
-      }
+      throw UsageError(*name +
+        " applies to one body, not to --materials separate; write the "
+        "interfaces between the materials with --interfaces");
     }
   }
 

@@ -30,27 +30,20 @@ def report(text):
     sys.__stdout__.flush()
 
 
-def gui_proxies():
-    """{XML name: [proxy]} of the pipeline the playback built."""
-    found = {}
-    for _, proxy in GetSources().items():
-        found.setdefault(proxy.GetXMLName(), []).append(proxy)
-    return found
-
-
 def mesh_arrays(proxy):
-    """(points, connectivity, cell types) of a proxy's output, fetched to the client."""
+    """(points, connectivity, cell types) of a proxy's output (an unstructured grid, or the
+    polygons of a polydata), fetched to the client."""
     data = servermanager.Fetch(proxy)
-    points = vtk_to_numpy(data.GetPoints().GetData())
-    cells = data.GetCells() if data.IsA("vtkUnstructuredGrid") else data.GetPolys()
-    connectivity = vtk_to_numpy(cells.GetConnectivityArray())
-    types = (vtk_to_numpy(data.GetCellTypesArray()) if data.IsA("vtkUnstructuredGrid")
-             else np.full(data.GetNumberOfCells(), 5))
-    return points, connectivity, types
+    if data.IsA("vtkUnstructuredGrid"):
+        cells, types = data.GetCells(), T.cell_types(data)
+    else:
+        cells = data.GetPolys()
+        types = np.array([data.GetCellType(cell) for cell in range(data.GetNumberOfCells())])
+    return T.points(data), vtk_to_numpy(cells.GetConnectivityArray()), types
 
 
 def main():
-    gui = gui_proxies()
+    gui = T.proxies_by_xml_name(GetSources())
     counts = {name: len(proxies) for name, proxies in gui.items()}
     expected = dict({name: 1 for name in MENU_FILTERS}, stmNIFTIReader=1, ExtractGrid=1)
     assert counts == expected, "the GUI's pipeline objects: %r" % counts
@@ -92,8 +85,8 @@ def main():
     # The interfaces between the block's regions, alone in the view, coloured by the pair of
     # materials they separate.
     view = GetActiveViewOrCreate("RenderView")
-    for proxy in gui_proxies().values():
-        simple.Hide(proxy[0], view)
+    for proxies in gui.values():
+        simple.Hide(proxies[0], view)
     display = simple.Show(gui["stmInterfaceSurface"][0], view)
     simple.ColorBy(display, ("CELLS", "BoundaryLabels", "Magnitude"))
     display.RescaleTransferFunctionToDataRange(True)

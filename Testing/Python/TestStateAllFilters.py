@@ -13,9 +13,7 @@ import stmtesting as T
 
 LoadPlugin(os.environ["STM_PLUGIN"], ns=globals())
 LoadState(os.environ["STM_STATE"])
-sources = {}
-for (name, _), proxy in GetSources().items():
-    sources.setdefault(proxy.GetXMLName(), []).append(proxy)
+sources = T.proxies_by_xml_name(GetSources())
 expected = {"stmNIFTIReader": 1, "ExtractGrid": 1, "stmImageToSpacetree": 1,
             "stmSpacetreeBalance": 1, "stmSpacetreeTessellate": 1, "stmVertexSnap": 1,
             "stmMarchingSimplices": 2, "stmBoundarySmooth": 1, "stmSeparatingFunction": 1,

@@ -311,6 +311,17 @@ def max_level_difference(lo, hi, levels, face_only=False):
 
 
 # ------------------------------------------------------------------------------------------------
+# ParaView pipelines
+
+def proxies_by_xml_name(sources):
+    """{XML name: [proxy]} of the proxies of paraview.simple.GetSources() given as `sources`."""
+    found = {}
+    for proxy in sources.values():
+        found.setdefault(proxy.GetXMLName(), []).append(proxy)
+    return found
+
+
+# ------------------------------------------------------------------------------------------------
 # Screenshots
 
 def screenshot_coverage(path):
