@@ -11,6 +11,8 @@ packages=(
   # toolchain and test frameworks
   build-essential cmake ninja-build pkg-config clang-format
   libgtest-dev libbenchmark-dev
+  # the fuzz targets and the core's sanitizer build (scripts/fuzz.sh): clang with libFuzzer
+  clang libclang-rt-14-dev
   # ParaView 5.11 (bundles VTK 9.2); never libvtk9-dev / python3-vtk9 (they conflict)
   paraview paraview-dev python3-paraview python3-dev python3-numpy
   # find_package(ParaView) dependencies not pulled in by paraview-dev

@@ -21,6 +21,7 @@ import os
 import random
 import re
 import shutil
+import struct
 import subprocess
 import sys
 
@@ -1456,20 +1457,27 @@ def ball_volume(radius):
     return 4.0 / 3.0 * 3.141592653589793 * radius ** 3
 
 
-def write_gray_image(c, name, dimensions, gray):
-    """A float gray image of 1 mm voxels with gray(i, j, k) at each voxel, as .mha or .vti."""
-    vtk = cut_vtk_modules()
+def filled_image(vtk, dimensions, vtk_type, name, value):
+    """A vtkImageData of `dimensions` points with the scalar array `name` of `vtk_type`, holding
+    value(i, j, k) at each point (i fastest)."""
     image = vtk["vtkImageData"]()
     image.SetDimensions(*dimensions)
-    image.AllocateScalars(10, 1)  # VTK_FLOAT
+    image.AllocateScalars(vtk_type, 1)
     scalars = image.GetPointData().GetScalars()
-    scalars.SetName("gray")
+    scalars.SetName(name)
     index = 0
     for k in range(dimensions[2]):
         for j in range(dimensions[1]):
             for i in range(dimensions[0]):
-                scalars.SetValue(index, gray(i, j, k))
+                scalars.SetValue(index, value(i, j, k))
                 index += 1
+    return image
+
+
+def write_gray_image(c, name, dimensions, gray):
+    """A float gray image of 1 mm voxels with gray(i, j, k) at each voxel, as .mha or .vti."""
+    vtk = cut_vtk_modules()
+    image = filled_image(vtk, dimensions, 10, "gray", gray)  # VTK_FLOAT
     path = c.path(name)
     errors = []
     if name.endswith(".vti"):
@@ -1688,10 +1696,16 @@ def cut_run(c, image, name, arguments, inside=1, extension=".vtu"):
     return summary, tessellate, cut, mesh, out, err
 
 
-def staircase_volume(c, image, name, layers):
-    """The total volume (area) of the staircase mesh with LAYERS background layers."""
+def staircase_volume(c, image, name, layers, arguments=None):
+    """The total volume (area) of the staircase mesh with LAYERS background layers: the
+    tessellation of a run with `arguments` (the labels function's spacetree has leaves of one
+    voxel at convex corners, which --separating none's has not), or of --separating none's."""
     output = c.path(name + ".vtu")
-    c.run_ok([image, "-o", output, "--boundary-layer", str(layers)] + STAIRCASE)
+    if arguments is None:
+        c.run_ok([image, "-o", output, "--boundary-layer", str(layers)] + STAIRCASE)
+    else:
+        c.run_ok([image, "-o", output, "--boundary-layer", str(layers), "--stop-after",
+                  "tessellate"] + arguments)
     return sum(read_cut(output)["measures"])
 
 
@@ -1724,7 +1738,7 @@ def case_cut_default(c):
     # Volume conservation: snapping and smoothing move only points inside the domain, and the
     # cut covers exactly the domain of the staircase mesh with one background layer.
     total = sum(mesh["measures"])
-    staircase = staircase_volume(c, image, "staircase", 1)
+    staircase = staircase_volume(c, image, "staircase", 1, [])
     check(close(total, staircase), "the cut mesh measures %r, the staircase mesh with one "
           "layer %r" % (total, staircase))
     # The surface lies within half a voxel of the voxels' boundary.
@@ -1960,7 +1974,7 @@ def case_cut_two_dimensional(c):
     check(mesh["types"] == {TRIANGLE}, "2D cut cell types %s" % mesh["types"])
     check("triangles_per_material" in summary, "no triangles_per_material")
     total = sum(mesh["measures"])
-    staircase = staircase_volume(c, flat, "staircase", 1)
+    staircase = staircase_volume(c, flat, "staircase", 1, [])
     check(close(total, staircase), "the 2D cut mesh measures %r, the staircase mesh with one "
           "layer %r" % (total, staircase))
     output, summary_path = c.path("flat_surface.vtp"), c.path("flat_surface.json")
@@ -2133,7 +2147,7 @@ def case_snap_quality(c):
     check(summary["parameters"]["snap"] == "quality", "bad snap parameter")
     check(stage(summary, "snap")["snapped_points"] > 0, "--snap quality snapped nothing")
     total = sum(mesh["measures"])
-    staircase = staircase_volume(c, image, "staircase", 1)
+    staircase = staircase_volume(c, image, "staircase", 1, [])
     check(close(total, staircase), "the mesh measures %r, the staircase mesh with one layer %r"
           % (total, staircase))
     # The quality-driven rule snaps only where the cut's elements get no worse: the worst
@@ -2218,7 +2232,7 @@ def case_stop_after_snap_and_smooth(c):
     check("Snapped" in snapped["point_arrays"], "no point array Snapped")
     check(snap["snapped_points"] > 0, "nothing snapped")
     # Snapping moves points inside the domain: its volume stays.
-    check(close(sum(snapped["measures"]), staircase_volume(c, image, "staircase", 1)),
+    check(close(sum(snapped["measures"]), staircase_volume(c, image, "staircase", 1, [])),
           "snapping changed the domain")
     # --stop-after smooth is the default.
     _, _, _, explicit, _, _ = cut_run(c, image, "explicit", ["--stop-after", "smooth"])
@@ -2651,7 +2665,7 @@ def case_materials_separate(c):
           cut["cut_points"], "cut figures %s" % cut)
     check(cut["inside_cells"] == sum(1 for m in mesh["materials"] if m != 0),
           "inside_cells %s" % cut["inside_cells"])
-    check(close(sum(mesh["measures"]), staircase_volume(c, boxes, "staircase", 1)),
+    check(close(sum(mesh["measures"]), staircase_volume(c, boxes, "staircase", 1, ["--materials", "separate"])),
           "the cut does not cover the staircase with one background layer")
     volumes = material_volumes(mesh)
     for label in ("1", "2"):
@@ -3288,6 +3302,182 @@ def case_export_label_table_beside(c):
         names_file.write("1 Ball\none Box\n")
     _, err = c.run_ok([image, "--materials", "separate", "-o", c.path("warned.msh")])
     check("warning: the label table beside the input is ignored" in err, "no warning")
+
+
+
+# ------------------------------------------------------------------------------------------------
+# Degenerate and hostile inputs (issue 10, docs/reliability.md): each gives a clear error or a
+# valid mesh that keeps every component of the image.
+
+VTK_UNSIGNED_CHAR, VTK_INT, VTK_FLOAT = 3, 6, 10
+
+
+def write_any_image(c, name, dimensions, value, vtk_type=VTK_UNSIGNED_CHAR, spacing=(1, 1, 1),
+                    direction=None):
+    """A .vti image (inline binary) of any scalar type, value(i, j, k) per voxel, with a spacing
+    and a direction matrix (9 numbers, row-major) if given."""
+    vtk = vtk_modules()
+    image = filled_image(vtk, dimensions, vtk_type, "labels", value)
+    image.SetSpacing(*spacing)
+    if direction is not None:
+        image.SetDirectionMatrix(*direction)
+    errors = []
+    writer = watched(vtk["vtkXMLImageDataWriter"](), errors)
+    writer.SetDataModeToBinary()  # inline: Debian 12's libexpat fails on appended data
+    writer.SetInputData(image)
+    writer.SetFileName(c.path(name))
+    writer.Write()
+    check(not errors, "cannot write %s: %s" % (name, errors))
+    return c.path(name)
+
+
+def check_valid_mesh(path, dimension):
+    """Conformity of a simplicial mesh read back: every facet in at most two cells, and every
+    cell of positive measure. Returns the mesh as read_cut gives it."""
+    vtk, grid, errors = read_grid(path)
+    check(not errors, "%s: %s" % (path, errors))
+    facets = {}
+    ids = None
+    for cell in range(grid.GetNumberOfCells()):
+        points = grid.GetCell(cell).GetPointIds()
+        ids = [points.GetId(k) for k in range(points.GetNumberOfIds())]
+        check(len(ids) == dimension + 1, "%s: cell %d has %d points" % (path, cell, len(ids)))
+        for skip in range(dimension + 1):
+            facet = tuple(sorted(ids[:skip] + ids[skip + 1:]))
+            facets[facet] = facets.get(facet, 0) + 1
+    check(max(facets.values()) <= 2, "%s: a facet is shared by more than two cells" % path)
+    mesh = read_cut(path)
+    check(min(mesh["measures"]) > 0, "%s: a cell has no positive measure" % path)
+    return mesh
+
+
+def run_degenerate(c, image, name, arguments=(), dimension=3, volume_error=None):
+    """Meshes an image with the default pipeline: exit 0, a valid mesh, no lost component and
+    no inverted cell; returns the summary."""
+    output, summary_path = c.path(name + ".vtu"), c.path(name + ".json")
+    c.run_ok([image, "-o", output, "--summary", summary_path] + list(arguments))
+    summary = load_summary(summary_path)
+    check_valid_mesh(output, dimension)
+    check(summary["quality"]["inverted_cells"] == 0, "%s: inverted cells" % name)
+    for entry in summary["materials"]:
+        check(entry["lost_components"] == 0, "%s: material %s lost a component" %
+              (name, entry["material"]))
+        if volume_error is not None and entry["material"] != 0:
+            check(abs(entry["volume_error"]) <= volume_error, "%s: material %s volume error %s" %
+                  (name, entry["material"], entry["volume_error"]))
+    return summary
+
+
+def case_degenerate_small_images(c):
+    # One voxel: refused clearly. One voxel thick along any axis: a planar mesh in the image's
+    # own plane, with its true area (the quality report measures it in that plane).
+    single = write_any_image(c, "single.vti", (1, 1, 1), lambda i, j, k: 1)
+    c.run_failing([single, "-o", c.path("single.vtu")], 1, "1 x 1 x 1", output=c.path("single.vtu"))
+    for name, dimensions in [("yz", (1, 8, 8)), ("xz", (8, 1, 8)), ("xy", (8, 8, 1))]:
+        image = write_any_image(c, name + ".vti", dimensions, lambda i, j, k: 1)
+        summary = run_degenerate(c, image, name, dimension=2, volume_error=0.05)
+        area = summary["quality"]["volume_per_material"]["1"]
+        check(60 < area <= 64, "%s: area %s of the 8 x 8 plate" % (name, area))
+    # A plate one voxel thick inside a 3D image: kept, and not pinched through.
+    plate = write_any_image(c, "plate.vti", (8, 8, 5), lambda i, j, k: 1 if k == 2 else 0)
+    run_degenerate(c, plate, "plate")
+
+
+def case_degenerate_full_and_border(c):
+    # Every voxel foreground, a shell on the image border, and a block filling one corner of the
+    # image: one coarse leaf each, whose corners all lie where the body is a minority (the
+    # image's border counts as background); leaves of one voxel there keep them.
+    full = write_any_image(c, "full.vti", (10, 10, 10), lambda i, j, k: 1)
+    run_degenerate(c, full, "full", volume_error=0.1)
+    border = write_any_image(c, "border.vti", (10, 10, 10),
+                             lambda i, j, k: 1 if min(i, j, k) == 0 or max(i, j, k) == 9 else 0)
+    run_degenerate(c, border, "border", volume_error=0.2)
+    block = write_any_image(c, "block.vti", (16, 16, 16),
+                            lambda i, j, k: 1 if max(i, j, k) < 8 else 0)
+    out, _ = c.run_ok([block, "-o", c.path("block_table.vtu")])
+    check("80 corner voxels at voxel size" in out, "the table does not show the corner voxels")
+    run_degenerate(c, block, "block", volume_error=0.1)
+    square = write_any_image(c, "square.vti", (16, 16, 1),
+                             lambda i, j, k: 1 if max(i, j) < 8 else 0)
+    run_degenerate(c, square, "square", dimension=2, volume_error=0.05)
+
+
+def case_degenerate_labels(c):
+    # Labels at both ends of the 32-bit range, and 10^4 distinct labels, as materials.
+    extremes = write_any_image(
+        c, "extremes.vti", (12, 12, 12),
+        lambda i, j, k: 2147483647 if (i - 5.5) ** 2 + (j - 5.5) ** 2 + (k - 5.5) ** 2 < 16 else
+        (-5 if (i, j, k) == (0, 0, 0) else 0), VTK_INT)
+    summary = run_degenerate(c, extremes, "extremes", ["--labels", "all"])
+    check(sorted(entry["material"] for entry in summary["materials"]) == [-5, 0, 2147483647],
+          "materials %s" % [entry["material"] for entry in summary["materials"]])
+    many = write_any_image(c, "many.vti", (25, 25, 16),
+                           lambda i, j, k: 1 + i + 25 * (j + 25 * k), VTK_INT)
+    summary = run_degenerate(c, many, "many", ["--labels", "all"])
+    check(len([e for e in summary["materials"] if e["material"] != 0]) == 10000,
+          "%d materials, not 10000" % len(summary["materials"]))
+
+
+def case_degenerate_gray_values(c):
+    # NaN and Inf in a gray-value image: refused with the reason, no mesh.
+    body = write_any_image(c, "body.vti", (10, 10, 10), lambda i, j, k: 1)
+    for name, bad in [("nan", float("nan")), ("inf", float("inf"))]:
+        gray = write_any_image(c, name + ".vti", (10, 10, 10),
+                               lambda i, j, k: bad if (i, j, k) == (4, 4, 4) else 400.0 * (i < 6),
+                               VTK_FLOAT)
+        c.run_failing([body, "--separating", "gray:%s:200" % gray, "-o", c.path(name + ".vtu")],
+                      1, "NaN or infinite", output=c.path(name + ".vtu"))
+
+
+def case_degenerate_geometry(c):
+    # A direction matrix that is not axis-aligned is respected: the mesh is the axis-aligned
+    # one rotated. Spacings of 1e-6 and 1e6 give the same cut, scaled (docs/reliability.md: the
+    # snap and the smoothing's quality tests decide a few points differently there).
+    def ball(i, j, k):
+        return 1 if (i - 5.5) ** 2 + (j - 5.5) ** 2 + (k - 5.5) ** 2 < 16 else 0
+    angle = 0.3
+    cosine, sine = math.cos(angle), math.sin(angle)
+    plain = write_any_image(c, "plain.vti", (12, 12, 12), ball)
+    rotated = write_any_image(c, "rotated.vti", (12, 12, 12), ball,
+                              direction=(cosine, -sine, 0, sine, cosine, 0, 0, 0, 1))
+    meshes = {}
+    for name, image in [("plain", plain), ("rotated", rotated)]:
+        # Without snapping and smoothing, whose quality tests round differently in rotated
+        # coordinates, the cut depends on the function values alone.
+        run_degenerate(c, image, name, ["--smooth-iterations", "0", "--snap", "none"])
+        _, grid, _ = read_grid(c.path(name + ".vtu"))
+        meshes[name] = [grid.GetPoint(p) for p in range(grid.GetNumberOfPoints())]
+    check(len(meshes["plain"]) == len(meshes["rotated"]), "rotation changed the point count")
+    for a, b in zip(meshes["plain"], meshes["rotated"]):
+        expected = (cosine * a[0] - sine * a[1], sine * a[0] + cosine * a[1], a[2])
+        check(all(abs(x - y) < 1e-9 for x, y in zip(expected, b)),
+              "point %s is not the rotation of %s" % (b, a))
+    counts = {}
+    for name, spacing in [("unit", 1.0), ("tiny", 1e-6), ("huge", 1e6)]:
+        image = write_any_image(c, name + ".vti", (12, 12, 12), ball,
+                                spacing=(spacing, spacing, spacing))
+        summary = run_degenerate(c, image, name, ["--smooth-iterations", "0", "--snap", "none"])
+        counts[name] = (stage(summary, "cut")["cells"], stage(summary, "cut")["points"])
+        volume = summary["quality"]["volume_per_material"]["1"] / spacing ** 3
+        check(abs(volume - 280) < 0.15 * 280, "%s: volume %s voxels of 280" % (name, volume))
+    check(counts["tiny"] == counts["unit"] == counts["huge"],
+          "cells and points per spacing: %s" % counts)
+
+
+def case_degenerate_memory(c):
+    # A header that promises more voxels than memory holds is refused before reading, with the
+    # estimate (VTK's reader would abort the process allocating them).
+    with open(c.decompressed_aal(), "rb") as complete:
+        head = bytearray(complete.read(352 + 1000))
+    struct.pack_into("<8h", head, 40, 3, 30000, 30000, 30000, 1, 1, 1, 1)
+    path = c.path("huge.nii")
+    with open(path, "wb") as image_file:
+        image_file.write(bytes(head))
+    c.run_failing([path, "-o", c.path("huge.vtu")], 1, "30000 x 30000 x 30000 voxels",
+                  output=c.path("huge.vtu"))
+    code, _, err = c.run([path, "-o", c.path("huge.vtu")])
+    check(re.search(r"needs at least [0-9.]+ GiB, and this machine has [0-9.]+ GiB", err),
+          "no estimate in the message")
 
 
 def main():

@@ -50,6 +50,7 @@
 #include "vtkCylinder.h"
 #include "vtkDataArray.h"
 #include "vtkDataArrayRange.h"
+#include "vtkDataSetAttributes.h"
 #include "vtkDoubleArray.h"
 #include "vtkExecutive.h"
 #include "vtkExtractCells.h"
@@ -59,6 +60,7 @@
 #include "vtkImageData.h"
 #include "vtkImplicitBoolean.h"
 #include "vtkImplicitFunction.h"
+#include "vtkInformation.h"
 #include "vtkIntArray.h"
 #include "vtkLogger.h"
 #include "vtkLongLongArray.h"
@@ -79,6 +81,7 @@
 #include "vtkSMPTools.h"
 #include "vtkSmartPointer.h"
 #include "vtkSphere.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkTrivialProducer.h"
 #include "vtkType.h"
 #include "vtkUnsignedCharArray.h"
@@ -763,10 +766,11 @@ struct Options
   {
     return this->Cuts() && this->OutputMode == stmMarchingSimplices::SURFACE;
   }
-  /// The spacetree's thin-part refinement: for a cut at the labels function only.
+  /// The spacetree's thin-part refinement: for the labels function only, also in a run that
+  /// stops before the cut, so that its spacetree and tessellation are the full run's.
   int ThinPartMode() const
   {
-    if (!this->RefineThinParts || !this->Cuts() || this->Separating.Kind != SeparatingKind::Labels)
+    if (!this->RefineThinParts || this->Separating.Kind != SeparatingKind::Labels)
     {
       return stmImageToSpacetree::NO_THIN_PARTS;
     }
@@ -2253,6 +2257,82 @@ void CheckReadableFile(const std::string& path, bool gray = false)
   }
 }
 
+/// The memory this machine can still give (MemAvailable), or its physical memory where
+/// /proc/meminfo is missing; 0 when neither is known.
+double AvailableMemoryBytes()
+{
+  std::ifstream meminfo("/proc/meminfo");
+  std::string key;
+  double kibibytes = 0.0;
+  std::string unit;
+  while (meminfo >> key >> kibibytes >> unit)
+  {
+    if (key == "MemAvailable:")
+    {
+      return kibibytes * 1024.0;
+    }
+  }
+  const long pages = sysconf(_SC_PHYS_PAGES);
+  const long pageSize = sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && pageSize > 0 ? static_cast<double>(pages) * pageSize : 0.0;
+}
+
+std::string GiB(double bytes)
+{
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(1) << bytes / (1024.0 * 1024 * 1024) << " GiB";
+  return text.str();
+}
+
+/// Refuses, before any voxel is read, an image whose header promises more voxels than memory
+/// holds: VTK's readers allocate the whole image first and abort the process when that fails
+/// (a NIfTI header of 30000^3 voxels). The estimate is the image itself plus the spacetree
+/// stage's label copy (2 bytes per voxel), the least any run needs.
+void CheckImageFitsInMemory(vtkAlgorithm* reader, const std::string& context)
+{
+  reader->UpdateInformation();
+  if (Errors().HasErrors())
+  {
+    return; // the header's own errors are reported by the update
+  }
+  vtkInformation* outInfo = reader->GetOutputInformation(0);
+  int extent[6] = { 0, -1, 0, -1, 0, -1 };
+  if (!outInfo || !outInfo->Has(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT()))
+  {
+    return;
+  }
+  outInfo->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), extent);
+  double voxels = 1.0;
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    voxels *= std::max(0.0, static_cast<double>(extent[2 * axis + 1]) - extent[2 * axis] + 1.0);
+  }
+  int scalarType = VTK_DOUBLE;
+  int components = 1;
+  if (vtkInformation* scalars = vtkDataObject::GetActiveFieldInformation(
+        outInfo, vtkDataObject::FIELD_ASSOCIATION_POINTS, vtkDataSetAttributes::SCALARS))
+  {
+    scalarType = scalars->Has(vtkDataObject::FIELD_ARRAY_TYPE())
+      ? scalars->Get(vtkDataObject::FIELD_ARRAY_TYPE())
+      : scalarType;
+    components = scalars->Has(vtkDataObject::FIELD_NUMBER_OF_COMPONENTS())
+      ? std::max(1, scalars->Get(vtkDataObject::FIELD_NUMBER_OF_COMPONENTS()))
+      : components;
+  }
+  const double needed = voxels * (vtkDataArray::GetDataTypeSize(scalarType) * components + 2.0);
+  const double available = AvailableMemoryBytes();
+  if (available > 0.0 && needed > available)
+  {
+    std::ostringstream message;
+    message << context << ": the header promises " << extent[1] - extent[0] + 1 << " x "
+            << extent[3] - extent[2] + 1 << " x " << extent[5] - extent[4] + 1
+            << " voxels; reading and meshing them needs at least " << GiB(needed)
+            << ", and this machine has " << GiB(available)
+            << " available (crop or downsample the image)";
+    throw Failure(message.str());
+  }
+}
+
 /// A MetaImage header is text: "Key = Value" lines, with NDims among them and ElementDataFile
 /// last, before the voxels (.mha) or alone (.mhd).
 bool LooksLikeMetaImageHeader(const std::string& path)
@@ -2316,6 +2396,7 @@ vtkSmartPointer<vtkImageData> ReadImage(
       break;
   }
   info.Format = ImageFormatName(format->Format);
+  CheckImageFitsInMemory(reader, context);
 
   report.Seconds = TimedUpdate(reader);
   const std::string strayText = strayMessages.GetText();
@@ -3532,6 +3613,42 @@ MeshQuality MeasureMeshQuality(vtkPointSet* mesh)
     return quality;
   }
   vtkDataArray* materials = grid->GetCellData()->GetArray("Material");
+  // Triangles are measured in their plane, which need not be z = constant (an image of one
+  // voxel along x or y is meshed in its own plane): in an orthonormal frame (u, v) with u x v
+  // the mesh's normal, the sum of the triangles' area vectors. A triangle is inverted when it
+  // turns against the mesh's orientation.
+  double frame[2][3] = { { 1, 0, 0 }, { 0, 1, 0 } };
+  if (corners == 3)
+  {
+    double normal[3] = { 0, 0, 0 };
+    vtkNew<vtkIdList> ids;
+    for (vtkIdType cell = 0; cell < numberOfCells; ++cell)
+    {
+      cells->GetCellAtId(cell, ids);
+      double a[3], b[3], c[3], ab[3], ac[3], n[3];
+      grid->GetPoint(ids->GetId(0), a);
+      grid->GetPoint(ids->GetId(1), b);
+      grid->GetPoint(ids->GetId(2), c);
+      vtkMath::Subtract(b, a, ab);
+      vtkMath::Subtract(c, a, ac);
+      vtkMath::Cross(ab, ac, n);
+      vtkMath::Add(normal, n, normal);
+    }
+    if (vtkMath::Normalize(normal) > 0.0)
+    {
+      // u: the axis least aligned with the normal, made orthogonal to it.
+      int least = 0;
+      for (int k = 1; k < 3; ++k)
+      {
+        least = std::abs(normal[k]) < std::abs(normal[least]) ? k : least;
+      }
+      double axis[3] = { 0, 0, 0 };
+      axis[least] = 1.0;
+      vtkMath::Cross(axis, normal, frame[0]);
+      vtkMath::Normalize(frame[0]);
+      vtkMath::Cross(normal, frame[0], frame[1]);
+    }
+  }
   struct Partial
   {
     double Worst = 0.0;
@@ -3566,7 +3683,13 @@ MeshQuality MeasureMeshQuality(vtkPointSet* mesh)
         }
         else
         {
-          const double* pointers[3] = { coordinates[0], coordinates[1], coordinates[2] };
+          double planar[3][2];
+          for (int v = 0; v < 3; ++v)
+          {
+            planar[v][0] = vtkMath::Dot(coordinates[v], frame[0]);
+            planar[v][1] = vtkMath::Dot(coordinates[v], frame[1]);
+          }
+          const double* pointers[3] = { planar[0], planar[1], planar[2] };
           const auto shape = stm::MeasureSimplex<2>(pointers);
           measure = shape.Determinant / 2.0;
           condition = shape.Condition;
@@ -5233,6 +5356,12 @@ int Run(const Options& options)
       spacetreeReport.Description +=
         ", " + std::to_string(spacetree->GetNumberOfThinVoxels()) + " thin voxels refined";
     }
+    if (spacetree->GetNumberOfMinorityCornerVoxels() > 0)
+    {
+      spacetreeReport.Description += ", " +
+        std::to_string(spacetree->GetNumberOfMinorityCornerVoxels()) +
+        " corner voxels at voxel size";
+    }
   }
   image = nullptr; // the image is no longer needed: free it before the next stages
   summary.Stages.push_back(spacetreeReport);
@@ -5415,7 +5544,19 @@ int Run(const Options& options)
               << " inverted cells; " << (twoDimensional ? "area" : "volume") << " per material";
     for (const auto& entry : summary.Quality.VolumePerMaterial)
     {
-      std::cout << ' ' << entry.first << ": " << std::setprecision(1) << entry.second;
+      // One decimal for voxel-sized units; significant digits for spacings such as 1e-6 or 1e6,
+      // where one decimal would print 0.0 or 21 digits.
+      const double magnitude = std::abs(entry.second);
+      const bool fixedFits = magnitude == 0.0 || (magnitude >= 0.1 && magnitude < 1e7);
+      std::cout << ' ' << entry.first << ": ";
+      if (fixedFits)
+      {
+        std::cout << std::fixed << std::setprecision(1) << entry.second;
+      }
+      else
+      {
+        std::cout << std::defaultfloat << std::setprecision(4) << entry.second;
+      }
     }
     std::cout << std::defaultfloat << '\n';
   }

@@ -154,6 +154,7 @@ struct RefinementRequest
 struct BuildReport
 {
   vtkIdType ThinVoxels = 0;
+  vtkIdType MinorityCornerVoxels = 0;
   std::string Warning;
 };
 
@@ -238,6 +239,25 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
       thin.clear();
     }
   }
+  // Voxels at minority corners get leaves of one voxel, or a coarse leaf there could lose its
+  // material near the corner, or whole (see stm::MinorityCornerVoxels).
+  std::vector<std::uint8_t> minorityCorner;
+  if (request.ThinParts != stmImageToSpacetree::NO_THIN_PARTS)
+  {
+    const stm::Status cornerStatus = stm::MinorityCornerVoxels<Dim>(
+      image, request.ThinParts == stmImageToSpacetree::THIN_BODY_PARTS, minorityCorner, executor);
+    if (!cornerStatus.IsOk())
+    {
+      error = cornerStatus.GetMessage();
+      return false;
+    }
+    report.MinorityCornerVoxels =
+      std::count(minorityCorner.begin(), minorityCorner.end(), std::uint8_t{ 1 });
+    if (report.MinorityCornerVoxels == 0)
+    {
+      minorityCorner.clear();
+    }
+  }
   auto planLevels = [&](stm::RefinementPlan<Dim>& result)
   {
     planOptions.FinestSize = finest;
@@ -288,7 +308,8 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
   std::vector<std::uint8_t> minimumLevels;
   const bool labelSizes = std::any_of(request.MaterialMaxCellSizes.begin(),
     request.MaterialMaxCellSizes.end(), [](double size) { return size > 0; });
-  if (labelSizes || !request.InRegion.empty() || !request.Sizing.empty() || !thin.empty())
+  if (labelSizes || !request.InRegion.empty() || !request.Sizing.empty() || !thin.empty() ||
+    !minorityCorner.empty())
   {
     const std::vector<double> physicalEdges = plan.LargestEdges(planOptions.Spacing);
     const std::vector<double> voxelEdges =
@@ -306,6 +327,8 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
     // Half a voxel on every axis: voxel and face centres become lattice points.
     const auto thinLevel =
       static_cast<std::uint8_t>(thin.empty() ? 0 : plan.CoarsestLevelWithin(0.5, voxelEdges));
+    const auto voxelLevel = static_cast<std::uint8_t>(
+      minorityCorner.empty() ? 0 : plan.CoarsestLevelWithin(1.0, voxelEdges));
     minimumLevels.resize(materials.size());
     vtkSMPTools::For(0, static_cast<vtkIdType>(materials.size()),
       [&](vtkIdType begin, vtkIdType end)
@@ -316,6 +339,10 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
           if (!thin.empty() && thin[v])
           {
             level = std::max(level, thinLevel);
+          }
+          if (!minorityCorner.empty() && minorityCorner[v])
+          {
+            level = std::max(level, voxelLevel);
           }
           if (!request.InRegion.empty() && request.InRegion[v])
           {
@@ -526,6 +553,7 @@ void stmImageToSpacetree::PrintSelf(ostream& os, vtkIndent indent)
     "ThinMaterialParts" };
   os << indent << "ThinPartRefinement: " << thinPartModes[this->ThinPartRefinement] << "\n";
   os << indent << "NumberOfThinVoxels: " << this->NumberOfThinVoxels << "\n";
+  os << indent << "NumberOfMinorityCornerVoxels: " << this->NumberOfMinorityCornerVoxels << "\n";
   os << indent << "UseSizingArray: " << (this->UseSizingArray ? "On" : "Off") << "\n";
 }
 
@@ -861,6 +889,7 @@ int stmImageToSpacetree::RequestData(
   std::string error;
   BuildReport report;
   this->NumberOfThinVoxels = 0;
+  this->NumberOfMinorityCornerVoxels = 0;
   const bool built = geometry.Dimension == 3
     ? BuildTree<3>(
         materials, voxelDims, geometry, materialLabels, request, executor, output, report, error)
@@ -871,6 +900,7 @@ int stmImageToSpacetree::RequestData(
     vtkWarningMacro(<< report.Warning);
   }
   this->NumberOfThinVoxels = report.ThinVoxels;
+  this->NumberOfMinorityCornerVoxels = report.MinorityCornerVoxels;
   if (!built)
   {
     if (!this->GetAbortExecute())

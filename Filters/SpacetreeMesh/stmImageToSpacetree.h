@@ -181,7 +181,8 @@ public:
    * keeps a piece of every connected component. NO_THIN_PARTS (the default), THIN_BODY_PARTS
    * (body against background, for stmMarchingSimplices) or THIN_MATERIAL_PARTS (every
    * material, for stmMultiMaterialCut). Skipped, with a warning, when the refined lattice
-   * would be too large.
+   * would be too large. In either mode, the voxels at a convex corner or edge of their material
+   * also get leaves of one voxel (NumberOfMinorityCornerVoxels).
    */
   vtkSetClampMacro(ThinPartRefinement, int, NO_THIN_PARTS, THIN_MATERIAL_PARTS);
   vtkGetMacro(ThinPartRefinement, int);
@@ -191,6 +192,14 @@ public:
    * The voxels the last update refined as thin parts.
    */
   vtkGetMacro(NumberOfThinVoxels, vtkIdType);
+
+  /**
+   * The voxels the last update gave leaves of one voxel because they lie at a corner where their
+   * material holds less than half of the voxels around it (a convex corner or edge), so that no
+   * coarser leaf there loses its material near the corner (see stm::MinorityCornerVoxels).
+   * Only with ThinPartRefinement other than NO_THIN_PARTS.
+   */
+  vtkGetMacro(NumberOfMinorityCornerVoxels, vtkIdType);
 
   ///@{
   /**
@@ -226,6 +235,7 @@ protected:
   bool UseSizingArray = false;
   int ThinPartRefinement = NO_THIN_PARTS;
   vtkIdType NumberOfThinVoxels = 0;
+  vtkIdType NumberOfMinorityCornerVoxels = 0;
 
 private:
   stmImageToSpacetree(const stmImageToSpacetree&) = delete;

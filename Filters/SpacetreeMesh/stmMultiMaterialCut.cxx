@@ -108,6 +108,10 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
       }
     });
 
+  if (filter->GetAbortExecute())
+  {
+    return stm::Status::Aborted();
+  }
   stmSMPExecutor executor(filter);
   executor.SetProgressRange(0.02, 0.15);
   const int count = static_cast<int>(order.size());
@@ -299,7 +303,17 @@ int stmMultiMaterialCut::RequestData(
     return fail("the cell array Material must have one component, it has " +
       std::to_string(materialArray->GetNumberOfComponents()));
   }
+  // The serial preparation below takes most of a second on the AAL mesh: an abort set at the
+  // first progress event (the GUI's) is honoured before and after it, not only in the cut.
+  if (this->GetAbortExecute())
+  {
+    return 1;
+  }
   const std::vector<std::int64_t> order = PeelingOrder(materialArray, this->BackgroundMaterial);
+  if (this->GetAbortExecute())
+  {
+    return 1;
+  }
   if (order.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
   {
     return fail("too many materials");

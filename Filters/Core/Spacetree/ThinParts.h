@@ -471,6 +471,107 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
   return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
 }
 
+/// Voxels at a minority corner: a voxel of material m with a corner at which m holds less than
+/// half of the 2^d voxels around it (a convex corner or edge of m's region; voxels beyond the
+/// image count as background). A leaf larger than a voxel that covers such a voxel has that
+/// corner as a mesh point, and the labels function there gives the leaf's part near it to another
+/// material: an 8^3 block in a corner of a 16^3 image is one leaf whose corners all say
+/// "background", and the cut loses it whole. Leaves of one voxel at these voxels bound the loss
+/// to the corner's own voxel, as everywhere else. With bodyOnly the materials are the body and
+/// the background. corner: one flag per voxel (axis 0 fastest), 1 at a minority corner.
+template <int Dim, class Executor>
+Status MinorityCornerVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
+  std::vector<std::uint8_t>& corner, Executor& executor)
+{
+  std::int64_t voxelCount = 1;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    if (image.Dimensions[axis] < 1)
+    {
+      return Status::Invalid("image dimensions must be positive");
+    }
+    voxelCount *= image.Dimensions[axis];
+  }
+  if (image.Values == nullptr)
+  {
+    return Status::Invalid("the material image has no values");
+  }
+  corner.assign(static_cast<std::size_t>(voxelCount), 0);
+  struct CornerKernel
+  {
+    using Scratch = NoScratch;
+    const MaterialImage<Dim>* Image;
+    bool BodyOnly;
+    std::uint8_t* Corner;
+
+    std::int32_t MaterialAt(const LatticeIndex<Dim>& voxel) const
+    {
+      for (int axis = 0; axis < Dim; ++axis)
+      {
+        if (voxel[axis] < 0 || voxel[axis] >= this->Image->Dimensions[axis])
+        {
+          return BackgroundMaterial;
+        }
+      }
+      const MaterialIndex material =
+        this->Image->Values[LinearIndex<Dim>(voxel, this->Image->Dimensions)];
+      return this->BodyOnly ? (material == BackgroundMaterial ? 0 : 1) : material;
+    }
+
+    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    {
+      constexpr int Around = 1 << Dim;
+      for (std::int64_t linear = begin; linear < end; ++linear)
+      {
+        LatticeIndex<Dim> voxel;
+        std::int64_t rest = linear;
+        for (int axis = 0; axis < Dim; ++axis)
+        {
+          voxel[axis] = rest % this->Image->Dimensions[axis];
+          rest /= this->Image->Dimensions[axis];
+        }
+        const std::int32_t own = this->MaterialAt(voxel);
+        // With every face neighbour of its material, m holds the voxel and its d neighbours
+        // towards each corner: 1 + d of 2^d, never less than half. Most voxels end here.
+        bool uniform = true;
+        for (int axis = 0; axis < Dim && uniform; ++axis)
+        {
+          for (int step = -1; step <= 1 && uniform; step += 2)
+          {
+            LatticeIndex<Dim> neighbour = voxel;
+            neighbour[axis] += step;
+            uniform = neighbour[axis] >= 0 && neighbour[axis] < this->Image->Dimensions[axis] &&
+              this->MaterialAt(neighbour) == own;
+          }
+        }
+        if (uniform)
+        {
+          continue;
+        }
+        for (int c = 0; c < Around && !this->Corner[linear]; ++c)
+        {
+          // Corner c of the voxel is at voxel + bits of c; the voxels around it are
+          // corner - 1 + bits of k.
+          int same = 0;
+          for (int k = 0; k < Around; ++k)
+          {
+            LatticeIndex<Dim> around;
+            for (int axis = 0; axis < Dim; ++axis)
+            {
+              around[axis] = voxel[axis] + ((c >> axis) & 1) - 1 + ((k >> axis) & 1);
+            }
+            same += this->MaterialAt(around) == own ? 1 : 0;
+          }
+          this->Corner[linear] = 2 * same < Around ? 1 : 0;
+        }
+      }
+    }
+  };
+  CornerKernel kernel{ &image, bodyOnly, corner.data() };
+  executor.For(0, voxelCount, 1 << 14, kernel);
+  return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
+}
+
 } // namespace stm
 
 #endif
