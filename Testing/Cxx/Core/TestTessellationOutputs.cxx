@@ -682,8 +682,12 @@ TYPED_TEST(TessellationOutputsTest, UniformTreesGiveCubesTemplatesOrCentres)
     { "ball", MakeBallImage<D>(dims), 1 },
     { "random labels", MakeRandomImage<D>(dims, 12, 3, 5, 15), 1 }, { "blocks", blocks, 2 }
   };
-  for (const auto& [name, image, leafSize] : cases)
+  for (const auto& testCase : cases)
   {
+    // Named copies, not structured bindings: C++17 lambdas cannot capture those (clang).
+    const std::string& name = std::get<0>(testCase);
+    const LabelImage<D>& image = std::get<1>(testCase);
+    const std::int64_t leafSize = std::get<2>(testCase);
     SCOPED_TRACE(name);
     // All leaves are root cells: voxels (MaxCellSize 1), or blocks of 2^D voxels.
     stm::RefinementPlanOptions<D> plan;
