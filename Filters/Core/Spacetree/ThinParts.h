@@ -37,50 +37,82 @@
 namespace stm
 {
 
-/// thin: one flag per voxel (axis 0 fastest), 1 for a thin voxel.
-template <int Dim, class Executor>
-Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
-  std::vector<std::uint8_t>& thin, Executor& executor)
+namespace detail
 {
-  LatticeIndex<Dim> corners;
-  std::int64_t voxelCount = 1, cornerCount = 1;
+/// The voxel count of a material image, or an error for empty extents or missing values.
+template <int Dim>
+Status CountImageVoxels(const MaterialImage<Dim>& image, std::int64_t& voxelCount)
+{
+  voxelCount = 1;
   for (int axis = 0; axis < Dim; ++axis)
   {
     if (image.Dimensions[axis] < 1)
     {
       return Status::Invalid("image dimensions must be positive");
     }
-    corners[axis] = image.Dimensions[axis] + 1;
     voxelCount *= image.Dimensions[axis];
-    cornerCount *= corners[axis];
   }
   if (image.Values == nullptr)
   {
     return Status::Invalid("the material image has no values");
   }
+  return Status::Ok();
+}
+
+/// The material of a voxel (the background beyond the image); with bodyOnly 1 for the body and
+/// 0 for the background.
+template <int Dim>
+std::int32_t MaterialOrBodyAt(
+  const MaterialImage<Dim>& image, bool bodyOnly, const LatticeIndex<Dim>& voxel)
+{
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    if (voxel[axis] < 0 || voxel[axis] >= image.Dimensions[axis])
+    {
+      return BackgroundMaterial;
+    }
+  }
+  const MaterialIndex material = image.Values[LinearIndex<Dim>(voxel, image.Dimensions)];
+  return bodyOnly ? (material == BackgroundMaterial ? 0 : 1) : material;
+}
+
+/// The index of a linear position (axis 0 fastest) in a lattice of `dims`.
+template <int Dim>
+LatticeIndex<Dim> UnlinearIndex(std::int64_t linear, const LatticeIndex<Dim>& dims)
+{
+  LatticeIndex<Dim> index;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    index[axis] = linear % dims[axis];
+    linear /= dims[axis];
+  }
+  return index;
+}
+} // namespace detail
+
+/// thin: one flag per voxel (axis 0 fastest), 1 for a thin voxel.
+template <int Dim, class Executor>
+Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
+  std::vector<std::uint8_t>& thin, Executor& executor)
+{
+  std::int64_t voxelCount = 0;
+  const Status valid = detail::CountImageVoxels<Dim>(image, voxelCount);
+  if (!valid.IsOk())
+  {
+    return valid;
+  }
+  LatticeIndex<Dim> corners;
+  std::int64_t cornerCount = 1;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    corners[axis] = image.Dimensions[axis] + 1;
+    cornerCount *= corners[axis];
+  }
   constexpr int Around = 1 << Dim;
   auto materialAt = [&](const LatticeIndex<Dim>& voxel) -> std::int32_t
-  {
-    for (int axis = 0; axis < Dim; ++axis)
-    {
-      if (voxel[axis] < 0 || voxel[axis] >= image.Dimensions[axis])
-      {
-        return BackgroundMaterial;
-      }
-    }
-    const MaterialIndex material = image.Values[LinearIndex<Dim>(voxel, image.Dimensions)];
-    return bodyOnly ? (material == BackgroundMaterial ? 0 : 1) : material;
-  };
+  { return detail::MaterialOrBodyAt<Dim>(image, bodyOnly, voxel); };
   auto unlinear = [](std::int64_t linear, const LatticeIndex<Dim>& dims)
-  {
-    LatticeIndex<Dim> index;
-    for (int axis = 0; axis < Dim; ++axis)
-    {
-      index[axis] = linear % dims[axis];
-      linear /= dims[axis];
-    }
-    return index;
-  };
+  { return detail::UnlinearIndex<Dim>(linear, dims); };
 
   // Most voxels lie inside a region of one material, where every test below has its answer
   // without counting: the kernels walk rows along axis 0 and answer those voxels (and corners)
@@ -483,18 +515,11 @@ template <int Dim, class Executor>
 Status MinorityCornerVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
   std::vector<std::uint8_t>& corner, Executor& executor)
 {
-  std::int64_t voxelCount = 1;
-  for (int axis = 0; axis < Dim; ++axis)
+  std::int64_t voxelCount = 0;
+  const Status valid = detail::CountImageVoxels<Dim>(image, voxelCount);
+  if (!valid.IsOk())
   {
-    if (image.Dimensions[axis] < 1)
-    {
-      return Status::Invalid("image dimensions must be positive");
-    }
-    voxelCount *= image.Dimensions[axis];
-  }
-  if (image.Values == nullptr)
-  {
-    return Status::Invalid("the material image has no values");
+    return valid;
   }
   corner.assign(static_cast<std::size_t>(voxelCount), 0);
   struct CornerKernel
@@ -506,16 +531,7 @@ Status MinorityCornerVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
 
     std::int32_t MaterialAt(const LatticeIndex<Dim>& voxel) const
     {
-      for (int axis = 0; axis < Dim; ++axis)
-      {
-        if (voxel[axis] < 0 || voxel[axis] >= this->Image->Dimensions[axis])
-        {
-          return BackgroundMaterial;
-        }
-      }
-      const MaterialIndex material =
-        this->Image->Values[LinearIndex<Dim>(voxel, this->Image->Dimensions)];
-      return this->BodyOnly ? (material == BackgroundMaterial ? 0 : 1) : material;
+      return detail::MaterialOrBodyAt<Dim>(*this->Image, this->BodyOnly, voxel);
     }
 
     void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
@@ -523,13 +539,7 @@ Status MinorityCornerVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
       constexpr int Around = 1 << Dim;
       for (std::int64_t linear = begin; linear < end; ++linear)
       {
-        LatticeIndex<Dim> voxel;
-        std::int64_t rest = linear;
-        for (int axis = 0; axis < Dim; ++axis)
-        {
-          voxel[axis] = rest % this->Image->Dimensions[axis];
-          rest /= this->Image->Dimensions[axis];
-        }
+        const LatticeIndex<Dim> voxel = detail::UnlinearIndex<Dim>(linear, this->Image->Dimensions);
         const std::int32_t own = this->MaterialAt(voxel);
         // With every face neighbour of its material, m holds the voxel and its d neighbours
         // towards each corner: 1 + d of 2^d, never less than half. Most voxels end here.
