@@ -84,6 +84,9 @@ struct Case
   bool FaceBalanceOnly = false;
   stm::SpacetreeTessellationOptions Tessellation;
   bool Snap = false;
+  /// The binary cut's VertexSnap rule: QualityDriven (the default of stmVertexSnap and stmesh)
+  /// or Threshold (the paper's, Alpha 1/3).
+  stm::SnapRule SnapRule = stm::SnapRule::QualityDriven;
   int SmoothIterations = 0;
   int ImprovementSweeps = 0;
   int NumberOfMaterials = 1;
@@ -129,6 +132,7 @@ Case<D> Decode(ByteStream& bytes)
   c.SmoothIterations = smoothing % 5;
   // The quality sweeps dominate a run under coverage instrumentation: a few exercise them.
   c.ImprovementSweeps = (smoothing / 5) % 3;
+  c.SnapRule = (smoothing / 15) % 2 ? stm::SnapRule::Threshold : stm::SnapRule::QualityDriven;
   c.NumberOfMaterials = bytes.Range(1, 5);
   c.ThinParts = (flags & 128) ? 1 + bytes.Next() % 2 : 0;
   c.Labels.resize(static_cast<std::size_t>(voxels));
@@ -260,10 +264,12 @@ void CheckBinaryCut(const Case<D>& c, const stm::Spacetree<D>& tree,
   if (c.Snap)
   {
     stm::VertexSnap<D> snap;
-    // The rule stmVertexSnap and stmesh use by default. The threshold rule (Alpha 1/3) gives a
-    // cell of no volume on Testing/Fuzz/known-failures/threshold-snap-flat-cell
-    // (docs/reliability.md).
     stm::VertexSnapOptions options = stm::MultiMaterialCutOptions::QualityDrivenSnap();
+    if (c.SnapRule == stm::SnapRule::Threshold)
+    {
+      options = stm::VertexSnapOptions();
+      options.Rule = stm::SnapRule::Threshold;
+    }
     Require(snap
               .Snap(points.data(), values.data(), mesh.NumberOfPoints(), mesh.Connectivity.data(),
                 cells, options, executor)

@@ -4,7 +4,8 @@ The byte layout is FuzzCorePipeline.cxx's Decode: dimension (even 2D, odd 3D), t
 (1 + b % 12 in 2D, 1 + b % 7 in 3D), the parts of the pattern per axis (1 + b % 3), the
 largest cell (1 + b % 16), the flags (1 face balance only, 2 background, 4 Kuhn, 8 hybrid,
 16/32 template rule, 64 snap, 128 thin parts), balance level (b % 4), smoothing iterations
-(b % 5) and quality sweeps (b / 5 % 3), materials (1 + b % 5), the thin-part mode when flagged (1 + b % 2), then a label per
+(b % 5), quality sweeps (b / 5 % 3) and the binary cut's snap rule (b / 15 % 2: 1 threshold,
+0 quality driven), materials (1 + b % 5), the thin-part mode when flagged (1 + b % 2), then a label per
 voxel (b % (materials + 1)), axis 0 fastest. Run: python3 MakeSeedCorpus.py
 """
 import math

@@ -43,9 +43,10 @@
 // share no cell, so a round runs in parallel without locks, and the result does not depend on
 // the number of threads. A processed vertex is moved; the snap is undone (and the vertex
 // dropped for good, and nudged) if an incident cell would have all its vertices on the surface
-// (the paper: later smoothing could collapse it) or would lose its orientation or volume. After
-// each round the neighbours of snapped and nudged vertices recompute their claims, and the
-// neighbours of nudged ones may become candidates, until no candidate is left.
+// (the paper: later smoothing could collapse it) or would lose its orientation or become flat
+// (MinimumRelativeVolume). After each round the neighbours of snapped and nudged vertices recompute
+// their claims, and the neighbours of nudged ones may become candidates, until no candidate is
+// left.
 
 #include "../Check/SimplexQuality.h"
 #include "../Common/Determinant.h"
@@ -201,6 +202,10 @@ private:
   /// this, each at most MaxRevisions times.
   static constexpr double RevisitAbove = 2.5;
   static constexpr std::uint8_t MaxRevisions = 3;
+  /// A snap is refused where a cell's volume would fall below this fraction of the product of
+  /// its edge lengths from corner 0: far above a determinant's rounding error (about 1e-15 of
+  /// it), far below any cell a cut should keep.
+  static constexpr double MinimumRelativeVolume = 1e-10;
 
   struct Claim
   {
@@ -766,7 +771,11 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     }
     return false;
   };
-  // Whether every incident cell of v keeps its orientation with v at position.
+  // Whether every incident cell of v keeps its orientation with v at position, and keeps a
+  // volume above MinimumRelativeVolume of the product of its edge vectors from corner 0 (the
+  // largest volume those edges could span): a snap onto the plane of the cell's other corners
+  // leaves a determinant of rounding noise, of either sign, and the cut's pieces of such a
+  // cell are flat (found by FuzzCorePipeline).
   auto keepsOrientation = [&](std::int64_t v, const double* position)
   {
     for (std::int64_t j = offsets[v]; j < offsets[v + 1]; ++j)
@@ -785,9 +794,20 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
           after[r][c] = movedCorner[r] - movedOrigin[r];
         }
       }
+      double spanned = 1.0;
+      for (int c = 0; c < Dim; ++c)
+      {
+        double squared = 0.0;
+        for (int r = 0; r < Dim; ++r)
+        {
+          squared += after[r][c] * after[r][c];
+        }
+        spanned *= std::sqrt(squared);
+      }
       const double oldVolume = Determinant<Dim>(before);
       const double newVolume = Determinant<Dim>(after);
-      if (!(oldVolume > 0 ? newVolume > 0 : oldVolume < 0 && newVolume < 0))
+      const double floor = MinimumRelativeVolume * spanned;
+      if (!(oldVolume > 0 ? newVolume > floor : oldVolume < 0 && newVolume < -floor))
       {
         return false;
       }

@@ -249,6 +249,37 @@ TEST(VertexSnap, RefusesToInvertACell)
   EXPECT_EQ(accepted.Points[0], 0.2);
 }
 
+// The case FuzzCorePipeline found (Testing/Fuzz/regressions/core/threshold-snap-flat-cell):
+// d's snap along d-e (1/5 of the edge) lands exactly on the plane of a, b and c, which rounding
+// puts at a determinant of +4.4e-16, not 0. The old sign test let it through and the cut of the
+// flat cell gave pieces of no volume; the snap is now refused, d nudged.
+TEST(VertexSnap, RefusesToFlattenACellWhoseDeterminantRoundsPositive)
+{
+  //                                a             b        c        d        e        g
+  const std::vector<double> points{ 4, 3.5, 2.5, 6, 3, 2, 6, 4, 2, 7, 4, 2, 6, 4, 1, 7, 3, 1 };
+  const std::vector<std::int64_t> cells{ 0, 1, 2, 3, 2, 3, 5, 4 };
+  for (std::size_t c = 0; c < cells.size() / 4; ++c)
+  {
+    ASSERT_GT(ScaledVolume<3>(points, cells.data() + 4 * c), 0.0) << "cell " << c;
+  }
+  const std::vector<double> values{ 1, 0.5, -0.5, 0.25, -1, 1 };
+  const SnapRun<3> run = Snap<3>(points, values, cells, Third);
+  ASSERT_TRUE(run.Result.IsOk()) << run.Result.GetMessage();
+  EXPECT_EQ(run.Points, points);
+  EXPECT_EQ(run.Counts.Snapped, 0);
+  EXPECT_EQ(run.Counts.RefusedNonPositive, 1);
+  EXPECT_EQ(run.Refused[3], 1);
+  // Nudged: f(d) from 0.25 to 0.5, so that edge d-e is cut 1/3 of the way from d.
+  EXPECT_NEAR(run.Values[3], 0.5, 1e-12);
+
+  const CutResult<3> cut = Cut<3>(run.Points, run.Values, cells);
+  const std::vector<std::int64_t> labels(cut.Connectivity.size() / 4, 1);
+  const stm::MeshInvariantReport report =
+    stm::CheckSimplicialMesh<3>(cut.Coordinates, cut.Connectivity, &labels);
+  EXPECT_EQ(report.NonPositiveCells, 0) << report.Summary();
+  EXPECT_GT(report.MinimumVolume, 1e-3);
+}
+
 // Vertices 0 and 2 both claim and share triangle (0, 2, 3) whose vertex 3 is zero: only one of
 // them may snap. The smaller distance wins; on equal distances, the smaller point id.
 TEST(VertexSnap, ConflictsGoToTheSmallerDistanceThenTheSmallerId)
