@@ -519,6 +519,26 @@ def case_error_truncated_nii_data(c):
                   output=c.path("out.vtu"))
 
 
+def case_error_corrupt_nifti_header(c):
+    # The AAL atlas's own header with a datatype NIfTI does not define, or a bitpix that does
+    # not match it: vtkNIFTIImageReader indexed a table with the datatype and crashed (found by
+    # FuzzImageReading); refused before it reads, for .nii and .nii.gz alike.
+    with open(c.decompressed_aal(), "rb") as complete:
+        data = bytearray(complete.read())
+    for datatype, bitpix, expected in [
+            (28261, 8, "the NIfTI header's datatype 28261 is not a NIfTI type"),
+            (2, 16, "the NIfTI header's bitpix 16 does not match its datatype 2 (8 bits")]:
+        struct.pack_into("<hh", data, 70, datatype, bitpix)
+        path = c.path("datatype%d.nii" % datatype)
+        with open(path, "wb") as image_file:
+            image_file.write(bytes(data))
+        c.run_failing([path, "-o", c.path("out.vtu")], 1, expected, output=c.path("out.vtu"))
+        with gzip.open(path + ".gz", "wb") as compressed:
+            compressed.write(bytes(data))
+        c.run_failing([path + ".gz", "-o", c.path("out.vtu")], 1, expected,
+                      output=c.path("out.vtu"))
+
+
 def case_error_corrupt_other_formats(c):
     garbage = random.Random(7).randbytes(300)
     for name in ["bad.vti", "bad.mha", "bad.nrrd", "BAD.MHA"]:
@@ -541,6 +561,99 @@ def case_error_corrupt_other_formats(c):
     directory = c.path("folder.nii")
     os.mkdir(directory)
     c.run_failing([directory, "-o", c.path("out.vtu")], 1, "is a directory",
+                  output=c.path("out.vtu"))
+    # NRRD headers VTK's reader crashes on (dimension 1, 2 or above 4), misreads (a first axis
+    # of fewer than 10 samples taken for components, negative sizes) or half reads (ASCII data
+    # that is not numbers): refused before VTK reads them (found by FuzzImageReading).
+    def nrrd(name, dimension, sizes, data, encoding="raw"):
+        path = c.path(name)
+        with open(path, "wb") as image_file:
+            image_file.write(("NRRD0004\ntype: uint8\ndimension: %d\nsizes: %s\n"
+                              "encoding: %s\n\n" % (dimension, sizes, encoding)).encode() + data)
+        return path
+
+    for dimension, sizes in [(1, "24"), (2, "12 2"), (5, "12 2 1 1 1")]:
+        c.run_failing([nrrd("dim%d.nrrd" % dimension, dimension, sizes, bytes(24)), "-o",
+                       c.path("out.vtu")], 1, "NRRD dimension %d; VTK's NRRD reader reads "
+                      "dimension 3 (X Y Z) and 4 (components X Y Z) only" % dimension,
+                      output=c.path("out.vtu"))
+    c.run_failing([nrrd("narrow.nrrd", 3, "5 5 5", bytes(125)), "-o", c.path("out.vtu")], 1,
+                  "the NRRD image's first axis has 5 samples", output=c.path("out.vtu"))
+    c.run_failing([nrrd("negative.nrrd", 3, "12 -2 1", bytes(24)), "-o", c.path("out.vtu")], 1,
+                  "sizes are not 3 positive numbers", output=c.path("out.vtu"))
+    c.run_failing([nrrd("text.nrrd", 3, "12 2 1", b"1 2 x y", "ascii"), "-o",
+                   c.path("out.vtu")], 1, "ASCII data holds 'x', not a number, after 2 values",
+                  output=c.path("out.vtu"))
+    c.run_failing([nrrd("few.nrrd", 3, "12 2 1", b"1 2 3", "ascii"), "-o", c.path("out.vtu")],
+                  1, "holds 3 values for 24 voxels", output=c.path("out.vtu"))
+    # A header cut off inside its last line: vtkNrrdReader never returned (found by
+    # FuzzImageReading), for attached and detached data alike.
+    cut_off = c.path("cut_off.nhdr")
+    with open(cut_off, "wb") as image_file:
+        image_file.write(b"NRRD0004\ntype: uint8\ndimension: 4\nsizes: 1 4 3 2\nencoding: raw")
+    c.run_failing([cut_off, "-o", c.path("out.vtu")], 1,
+                  "the NRRD header's last line 'encoding: raw' has no line end",
+                  output=c.path("out.vtu"))
+    # Headers that bend the format, on which vtkNrrdReader crashed (a field without a value, a
+    # magic line with more after it, a space before a field's colon; found by FuzzImageReading).
+    for name, header, expected in [
+            ("empty.nhdr", b"NRRD0004\ntype: uint8\ndimension: 4\nsizes: 1 4 3 2\n"
+             b"encoding: raw\ndata file: \n\n", "line 6 of the NRRD header gives the field "
+             "'data file' no value"),
+            ("magic.nrrd", b"NRRD0004]\ntype: uint8\n\n",
+             "line 1 of the NRRD header is not a magic line NRRD0001 to NRRD0005"),
+            ("colon.nrrd", b"NRRD0004\ntype: uint8\ndimension :3\n\n",
+             "line 3 of the NRRD header is not a field 'name: value' of the format "
+             "('dimension :3')"),
+            # Fields VTK reads into vectors of the wrong length, a file pattern it would hand
+            # to snprintf, and a first axis it would take for the components.
+            ("twice.nrrd", b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 12 2 1\n"
+             b"space directions: (1,0,0) (0,1,0) (0,0,1)\n"
+             b"space directions: (1,0,0) (0,1,0) (0,0,1)\n\n",
+             "line 6 of the NRRD header gives the field 'space directions' a second time"),
+            ("early.nrrd", b"NRRD0004\ntype: uint8\nsizes: 12 2 1\ndimension: 3\n\n",
+             "line 3 of the NRRD header gives 'sizes' before 'dimension'"),
+            ("space.nrrd", b"NRRD0004\ntype: uint8\ndimension: 4\nspace: RAS\n"
+             b"sizes: 1 12 2 1\n\n", "line 5 of the NRRD header gives 4 sizes where VTK's "
+             "NRRD reader reads 3"),
+            ("pattern.nhdr", b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 12 2 1\n"
+             b"encoding: raw\ndata file: slice%s.raw 1 2 1\n\n", "line 6 of the NRRD header "
+             "gives the data file pattern 'slice%s.raw 1 2 1', not 'format min max step'"),
+            ("flat.nrrd", b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 12 2 1\n"
+             b"space directions: none (0,1,0) (0,0,1)\nencoding: raw\n\n",
+             "the NRRD image's first axis has no spacing (0 or none)")]:
+        with open(c.path(name), "wb") as image_file:
+            image_file.write(header + bytes(24))
+        c.run_failing([c.path(name), "-o", c.path("out.vtu")], 1, expected,
+                      output=c.path("out.vtu"))
+    # The same sizes as dimension 4 with one component are read.
+    four = nrrd("four.nrrd", 4, "1 5 5 5", bytes([0] * 62 + [1] + [0] * 62))
+    code, out, err = c.run([four, "-o", c.path("four.vtu"), "--stop-after", "spacetree"])
+    check(code == 0 and "5 x 5 x 5 voxels" in out, "a 4D NRRD of one component failed: " + err)
+    # A MetaImage header with a negative size made MetaIO throw std::bad_alloc, reported as
+    # "out of memory".
+    negative = c.path("negative.mha")
+    with open(negative, "wb") as image_file:
+        image_file.write(b"ObjectType = Image\nNDims = 3\nDimSize = 4 -3 2\n"
+                         b"ElementType = MET_UCHAR\nElementDataFile = LOCAL\n" + bytes(24))
+    c.run_failing([negative, "-o", c.path("out.vtu")], 1, "the header gives axis 1 a size of -3",
+                  output=c.path("out.vtu"))
+    # A MetaImage of 4 dimensions made MetaIO write past VTK's buffer (a heap overflow under
+    # AddressSanitizer), and a detached header whose data file is missing made it leak: both
+    # refused before VTK reads them (found by FuzzImageReading).
+    four_axes = c.path("four_axes.mha")
+    with open(four_axes, "wb") as image_file:
+        image_file.write(b"ObjectType = Image\nNDims = 4\nDimSize = 2 2 2 2\n"
+                         b"ElementType = MET_UCHAR\nElementDataFile = LOCAL\n" + bytes(16))
+    c.run_failing([four_axes, "-o", c.path("out.vtu")], 1,
+                  "MetaImage NDims = 4; VTK's MetaImage reader reads 1 to 3 dimensions",
+                  output=c.path("out.vtu"))
+    detached = c.path("detached.mhd")
+    with open(detached, "wb") as image_file:
+        image_file.write(b"ObjectType = Image\nNDims = 3\nDimSize = 4 3 2\n"
+                         b"ElementType = MET_UCHAR\nElementDataFile = nowhere.raw\n")
+    c.run_failing([detached, "-o", c.path("out.vtu")], 1,
+                  "the MetaImage header's data file '%s' cannot be read" % c.path("nowhere.raw"),
                   output=c.path("out.vtu"))
 
 
@@ -3478,6 +3591,20 @@ def case_degenerate_memory(c):
     code, _, err = c.run([path, "-o", c.path("huge.vtu")])
     check(re.search(r"needs at least [0-9.]+ GiB, and this machine has [0-9.]+ GiB", err),
           "no estimate in the message")
+    # A header that fits in memory but promises more voxels than its file could hold, even
+    # compressed 1032 to 1 (deflate's most): refused before the reader allocates them, with
+    # the sizes (the fuzz target FuzzImageReading ran out of memory on such headers).
+    struct.pack_into("<8h", head, 40, 3, 400, 400, 400, 1, 1, 1, 1)
+    path = c.path("lying.nii")
+    with open(path, "wb") as image_file:
+        image_file.write(bytes(head))
+    c.run_failing([path, "-o", c.path("lying.vtu")], 1,
+                  "400 x 400 x 400 voxels (64000000 bytes), more than a file of 1352 bytes can "
+                  "hold even compressed", output=c.path("lying.vtu"))
+    with gzip.open(c.path("lying.nii.gz"), "wb") as compressed:
+        compressed.write(bytes(head))
+    code, _, err = c.run([c.path("lying.nii.gz"), "-o", c.path("lying.vtu")])
+    check(code == 1 and "can hold even compressed" in err, "the .nii.gz was not refused: " + err)
 
 
 def main():

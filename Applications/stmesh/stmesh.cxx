@@ -37,13 +37,15 @@
 #include "stmSpacetreeBalance.h"
 #include "stmSpacetreeTessellate.h"
 #include "stmVertexSnap.h"
+#include "stmeshErrors.h"
+#include "stmeshImageInput.h"
 #include "stmeshMallocTunables.h"
+#include "stmeshText.h"
 
 #include "vtkAlgorithm.h"
 #include "vtkAlgorithmOutput.h"
 #include "vtkArrayDispatch.h"
 #include "vtkBox.h"
-#include "vtkCallbackCommand.h"
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkCommand.h"
@@ -52,7 +54,6 @@
 #include "vtkDataArrayRange.h"
 #include "vtkDataSetAttributes.h"
 #include "vtkDoubleArray.h"
-#include "vtkExecutive.h"
 #include "vtkExtractCells.h"
 #include "vtkFieldData.h"
 #include "vtkGenericCell.h"
@@ -62,15 +63,9 @@
 #include "vtkImplicitFunction.h"
 #include "vtkInformation.h"
 #include "vtkIntArray.h"
-#include "vtkLogger.h"
 #include "vtkLongLongArray.h"
 #include "vtkMatrix4x4.h"
-#include "vtkMetaImageReader.h"
-#include "vtkNIFTIImageReader.h"
 #include "vtkNew.h"
-#include "vtkNrrdReader.h"
-#include "vtkObjectFactory.h"
-#include "vtkOutputWindow.h"
 #include "vtkPlane.h"
 #include "vtkPointData.h"
 #include "vtkPointSet.h"
@@ -81,7 +76,6 @@
 #include "vtkSMPTools.h"
 #include "vtkSmartPointer.h"
 #include "vtkSphere.h"
-#include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkTrivialProducer.h"
 #include "vtkType.h"
 #include "vtkUnsignedCharArray.h"
@@ -89,7 +83,6 @@
 #include "vtkUnstructuredGridWriter.h"
 #include "vtkVariant.h"
 #include "vtkVersion.h"
-#include "vtkXMLImageDataReader.h"
 #include "vtkXMLPolyDataWriter.h"
 #include "vtkXMLUnstructuredGridWriter.h"
 
@@ -117,7 +110,6 @@
 #include <limits>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <numeric>
 #include <set>
 #include <sstream>
@@ -133,6 +125,24 @@
 
 namespace
 {
+using stmesh::AvailableMemoryBytes;
+using stmesh::CheckReadableFile;
+using stmesh::Diagnostics;
+using stmesh::EndsWith;
+using stmesh::Errors;
+using stmesh::Failure;
+using stmesh::FileName;
+using stmesh::FindImageFormat;
+using stmesh::GiB;
+using stmesh::ImageFormatInfo;
+using stmesh::ImageInfo;
+using stmesh::ImageRole;
+using stmesh::ImageValues;
+using stmesh::SupportedInputExtensions;
+using stmesh::ThrowIfFailed;
+using stmesh::ToLower;
+using stmesh::Trim;
+using stmesh::Watch;
 // Debian package mricron-data: the AAL atlas, a 181 x 217 x 181 label image with 116 regions.
 const char* const DefaultInput = "/usr/share/mricron/templates/aal.nii.gz";
 
@@ -388,7 +398,8 @@ Exit status: 0 on success, 1 on an error, 2 on a usage error.
 )";
 
 //------------------------------------------------------------------------------------------------
-// Failures. Each line of what() becomes one "stmesh: error:" line on stderr.
+// Usage errors (Failure: stmeshErrors.h). Each line of what() becomes one "stmesh: error:" line
+// on stderr.
 
 class UsageError : public std::runtime_error
 {
@@ -399,44 +410,8 @@ public:
   }
 };
 
-class Failure : public std::runtime_error
-{
-public:
-  explicit Failure(const std::string& message)
-    : std::runtime_error(message)
-  {
-  }
-};
-
 //------------------------------------------------------------------------------------------------
 // Small string helpers.
-
-std::string ToLower(std::string text)
-{
-  std::transform(text.begin(), text.end(), text.begin(),
-    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return text;
-}
-
-bool EndsWith(const std::string& text, const std::string& suffix)
-{
-  return text.size() >= suffix.size() &&
-    text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-std::string Trim(const std::string& text)
-{
-  const auto isSpace = [](unsigned char c) { return std::isspace(c) != 0; };
-  auto begin = std::find_if_not(text.begin(), text.end(), isSpace);
-  auto end = std::find_if_not(text.rbegin(), text.rend(), isSpace).base();
-  return begin < end ? std::string(begin, end) : std::string();
-}
-
-std::string FileName(const std::string& path)
-{
-  const std::size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? path : path.substr(slash + 1);
-}
 
 std::string DirectoryName(const std::string& path)
 {
@@ -464,57 +439,6 @@ std::string AbsolutePath(const std::string& path)
 
 //------------------------------------------------------------------------------------------------
 // Input and output formats, chosen by extension (case-insensitive).
-
-enum class ImageFormat
-{
-  NIfTI,
-  MetaImage,
-  NRRD,
-  VTKImage
-};
-
-struct ImageFormatInfo
-{
-  const char* Extension;
-  ImageFormat Format;
-};
-
-// Longest extensions first, so that ".nii.gz" wins over any shorter match.
-const ImageFormatInfo ImageExtensions[] = { { ".nii.gz", ImageFormat::NIfTI },
-  { ".nii", ImageFormat::NIfTI }, { ".mha", ImageFormat::MetaImage },
-  { ".mhd", ImageFormat::MetaImage }, { ".nrrd", ImageFormat::NRRD },
-  { ".nhdr", ImageFormat::NRRD }, { ".vti", ImageFormat::VTKImage } };
-
-const char* const SupportedInputExtensions = ".nii, .nii.gz, .mha, .mhd, .nrrd, .nhdr, .vti";
-
-const ImageFormatInfo* FindImageFormat(const std::string& path)
-{
-  const std::string lower = ToLower(FileName(path));
-  for (const ImageFormatInfo& info : ImageExtensions)
-  {
-    if (EndsWith(lower, info.Extension) && lower.size() > std::strlen(info.Extension))
-    {
-      return &info;
-    }
-  }
-  return nullptr;
-}
-
-const char* ImageFormatName(ImageFormat format)
-{
-  switch (format)
-  {
-    case ImageFormat::NIfTI:
-      return "NIfTI";
-    case ImageFormat::MetaImage:
-      return "MetaImage";
-    case ImageFormat::NRRD:
-      return "NRRD";
-    case ImageFormat::VTKImage:
-      return "VTK XML image";
-  }
-  return "?";
-}
 
 enum class MeshFormat
 {
@@ -1773,226 +1697,6 @@ Options ParseCommandLine(int argc, char* argv[])
 }
 
 //------------------------------------------------------------------------------------------------
-// VTK error capture.
-
-// VTK messages look like "ERROR: In file.cxx, line 12\nvtkClass (0x55d0c0): text\n\n"; keep
-// "vtkClass: text", which is what a user can act on.
-std::string CleanVTKMessage(const std::string& message)
-{
-  std::string text = message;
-  if (text.compare(0, 10, "ERROR: In ") == 0 || text.compare(0, 12, "Warning: In ") == 0 ||
-    text.compare(0, 20, "Generic Warning: In ") == 0)
-  {
-    const std::size_t newline = text.find('\n');
-    text = newline == std::string::npos ? std::string() : text.substr(newline + 1);
-  }
-  // Drop the object addresses " (0x55d0c0)": noise to a user, and different on every run.
-  std::size_t address = 0;
-  while ((address = text.find(" (0x", address)) != std::string::npos)
-  {
-    std::size_t end = address + 4;
-    while (end < text.size() && std::isxdigit(static_cast<unsigned char>(text[end])))
-    {
-      ++end;
-    }
-    if (end < text.size() && text[end] == ')' && end > address + 4)
-    {
-      text.erase(address, end + 1 - address);
-    }
-    else
-    {
-      address = end;
-    }
-  }
-  return Trim(text);
-}
-
-/// stderr as it was at start-up. While a reader runs, std::cerr is captured (see
-/// StandardErrorCapture), so stmesh's own warnings go through this stream instead.
-std::ostream& Diagnostics()
-{
-  static std::ostream stream(std::cerr.rdbuf());
-  return stream;
-}
-
-// All VTK errors of the run, in order. The executives' "Algorithm X returned failure for request"
-// only repeats that a filter failed, so it is kept apart and shown only when nothing more
-// specific was reported.
-class ErrorLog
-{
-public:
-  void Record(const std::string& message, bool fromExecutive)
-  {
-    std::lock_guard<std::mutex> lock(this->Mutex);
-    std::string text = CleanVTKMessage(message);
-    if (fromExecutive)
-    {
-      // The rest of the message dumps the whole pipeline request.
-      const std::size_t colon = text.find(" for request:");
-      if (colon != std::string::npos)
-      {
-        text = text.substr(0, colon);
-      }
-      this->ExecutiveMessages.push_back(text);
-    }
-    else
-    {
-      this->Messages.push_back(text.empty() ? std::string("unspecified VTK error") : text);
-    }
-  }
-
-  bool HasErrors()
-  {
-    std::lock_guard<std::mutex> lock(this->Mutex);
-    return !this->Messages.empty() || !this->ExecutiveMessages.empty();
-  }
-
-  /// The recorded messages, one per line, and a clean log for the next stage.
-  std::string Take()
-  {
-    std::lock_guard<std::mutex> lock(this->Mutex);
-    const std::vector<std::string>& chosen =
-      this->Messages.empty() ? this->ExecutiveMessages : this->Messages;
-    std::string joined;
-    for (const std::string& message : chosen)
-    {
-      joined += (joined.empty() ? "" : "\n") + message;
-    }
-    this->Messages.clear();
-    this->ExecutiveMessages.clear();
-    return joined;
-  }
-
-private:
-  std::mutex Mutex;
-  std::vector<std::string> Messages;
-  std::vector<std::string> ExecutiveMessages;
-};
-
-ErrorLog& Errors()
-{
-  static ErrorLog log;
-  return log;
-}
-
-// vtkImageReader (the base of vtkNrrdReader) only warns when a file is shorter than its header
-// promises, and then returns partly uninitialised voxels: such a warning must fail the run.
-void HandleWarning(const char* message)
-{
-  const std::string text = CleanVTKMessage(message ? message : "");
-  if (text.find("File operation failed") != std::string::npos)
-  {
-    Errors().Record(text + " (the file is truncated or corrupt)", false);
-    return;
-  }
-  Diagnostics() << "stmesh: warning: " << text << '\n';
-}
-
-// Receives the errors and warnings of objects that have no ErrorEvent observer (internal helpers
-// of the readers, for instance): errors go to the log, warnings to stderr, and nothing ever goes
-// to a popup or to stdout, which carries the table.
-class stmeshOutputWindow : public vtkOutputWindow
-{
-public:
-  static stmeshOutputWindow* New();
-  vtkTypeMacro(stmeshOutputWindow, vtkOutputWindow);
-
-  void DisplayErrorText(const char* text) override { Errors().Record(text ? text : "", false); }
-  void DisplayWarningText(const char* text) override { this->Warn(text); }
-  void DisplayGenericWarningText(const char* text) override { this->Warn(text); }
-  void DisplayDebugText(const char*) override {}
-  void DisplayText(const char* text) override
-  {
-    if (text)
-    {
-      Diagnostics() << "stmesh: " << Trim(text) << '\n';
-    }
-  }
-
-protected:
-  stmeshOutputWindow() = default;
-  ~stmeshOutputWindow() override = default;
-
-private:
-  void Warn(const char* text) { HandleWarning(text); }
-
-  stmeshOutputWindow(const stmeshOutputWindow&) = delete;
-  void operator=(const stmeshOutputWindow&) = delete;
-};
-vtkStandardNewMacro(stmeshOutputWindow);
-
-void RecordAlgorithmError(vtkObject*, unsigned long, void*, void* callData)
-{
-  Errors().Record(callData ? static_cast<const char*>(callData) : "", false);
-}
-
-void RecordExecutiveError(vtkObject*, unsigned long, void*, void* callData)
-{
-  Errors().Record(callData ? static_cast<const char*>(callData) : "", true);
-}
-
-void RecordWarning(vtkObject*, unsigned long, void*, void* callData)
-{
-  HandleWarning(static_cast<const char*>(callData));
-}
-
-/// MetaIO (inside vtkMetaImageReader) reports problems such as "data not read completely" on
-/// std::cerr instead of through VTK, and the reader still succeeds. Everything written to
-/// std::cerr while an instance lives is kept, to be treated as an error.
-class StandardErrorCapture
-{
-public:
-  StandardErrorCapture()
-    : Saved(std::cerr.rdbuf(this->Captured.rdbuf()))
-  {
-  }
-  ~StandardErrorCapture() { std::cerr.rdbuf(this->Saved); }
-
-  std::string GetText() const { return Trim(this->Captured.str()); }
-
-private:
-  std::ostringstream Captured;
-  std::streambuf* Saved;
-
-  StandardErrorCapture(const StandardErrorCapture&) = delete;
-  void operator=(const StandardErrorCapture&) = delete;
-};
-
-/// Observe the errors (and warnings) of an algorithm and of its executive.
-void Watch(vtkAlgorithm* algorithm)
-{
-  vtkNew<vtkCallbackCommand> onError;
-  onError->SetCallback(RecordAlgorithmError);
-  algorithm->AddObserver(vtkCommand::ErrorEvent, onError);
-  vtkNew<vtkCallbackCommand> onWarning;
-  onWarning->SetCallback(RecordWarning);
-  algorithm->AddObserver(vtkCommand::WarningEvent, onWarning);
-  vtkNew<vtkCallbackCommand> onExecutiveError;
-  onExecutiveError->SetCallback(RecordExecutiveError);
-  algorithm->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, onExecutiveError);
-}
-
-/// Throw the recorded errors, if any, with the context ("reading 'x.nii'") on every line.
-void ThrowIfFailed(const std::string& context)
-{
-  if (!Errors().HasErrors())
-  {
-    return;
-  }
-  std::istringstream lines(Errors().Take());
-  std::string message;
-  std::string line;
-  while (std::getline(lines, line))
-  {
-    if (!Trim(line).empty())
-    {
-      message += (message.empty() ? "" : "\n") + context + ": " + Trim(line);
-    }
-  }
-  throw Failure(message.empty() ? context + " failed" : message);
-}
-
-//------------------------------------------------------------------------------------------------
 // Temporary output files: written next to the target and renamed on success. A signal handler
 // removes the file being written, so that Ctrl-C does not leave a stray temporary behind.
 
@@ -2214,280 +1918,30 @@ ThreadSetup SetUpThreads(int requestedThreads)
 }
 
 //------------------------------------------------------------------------------------------------
-// Reading.
+// Reading (stmeshImageInput.h), and the checks of the label image's type.
 
-struct ImageInfo
-{
-  int Dimensions[3] = { 0, 0, 0 };
-  double Spacing[3] = { 0.0, 0.0, 0.0 };
-  std::string ScalarType;
-  std::string Format;
-  bool CellLabels = false;              // labels are cell data (else point data)
-  int VoxelDimensions[3] = { 0, 0, 0 }; // one voxel per point, or per cell
-  std::vector<int> SpannedAxes;         // the axes with more than one voxel
-};
-
-/// The image file is there and readable: the input (gray false) or the gray image of
-/// --separating gray.
-void CheckReadableFile(const std::string& path, bool gray = false)
-{
-  const std::string prefix = gray ? "--separating: " : "";
-  const std::string what = gray ? "gray image" : "input";
-  if (!FindImageFormat(path))
-  {
-    throw Failure(prefix + what + " '" + path + "' has an unsupported extension; stmesh reads " +
-      SupportedInputExtensions);
-  }
-  struct stat info;
-  if (stat(path.c_str(), &info) != 0)
-  {
-    throw Failure(prefix + "cannot read " + what + " '" + path + "': " + std::strerror(errno));
-  }
-  if (S_ISDIR(info.st_mode))
-  {
-    throw Failure(prefix + what + " '" + path + "' is a directory, not an image file");
-  }
-  if (access(path.c_str(), R_OK) != 0)
-  {
-    throw Failure(prefix + "cannot read " + what + " '" + path + "': " + std::strerror(errno));
-  }
-  if (info.st_size == 0)
-  {
-    throw Failure(prefix + what + " '" + path + "' is empty");
-  }
-}
-
-/// The memory this machine can still give (MemAvailable), or its physical memory where
-/// /proc/meminfo is missing; 0 when neither is known.
-double AvailableMemoryBytes()
-{
-  std::ifstream meminfo("/proc/meminfo");
-  std::string key;
-  double kibibytes = 0.0;
-  std::string unit;
-  while (meminfo >> key >> kibibytes >> unit)
-  {
-    if (key == "MemAvailable:")
-    {
-      return kibibytes * 1024.0;
-    }
-  }
-  const long pages = sysconf(_SC_PHYS_PAGES);
-  const long pageSize = sysconf(_SC_PAGE_SIZE);
-  return pages > 0 && pageSize > 0 ? static_cast<double>(pages) * pageSize : 0.0;
-}
-
-std::string GiB(double bytes)
-{
-  std::ostringstream text;
-  text << std::fixed << std::setprecision(1) << bytes / (1024.0 * 1024 * 1024) << " GiB";
-  return text.str();
-}
-
-/// Refuses, before any voxel is read, an image whose header promises more voxels than memory
-/// holds: VTK's readers allocate the whole image first and abort the process when that fails
-/// (a NIfTI header of 30000^3 voxels). The estimate is the image itself plus the spacetree
-/// stage's label copy (2 bytes per voxel), the least any run needs.
-void CheckImageFitsInMemory(vtkAlgorithm* reader, const std::string& context)
-{
-  reader->UpdateInformation();
-  if (Errors().HasErrors())
-  {
-    return; // the header's own errors are reported by the update
-  }
-  vtkInformation* outInfo = reader->GetOutputInformation(0);
-  int extent[6] = { 0, -1, 0, -1, 0, -1 };
-  if (!outInfo || !outInfo->Has(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT()))
-  {
-    return;
-  }
-  outInfo->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), extent);
-  double voxels = 1.0;
-  for (int axis = 0; axis < 3; ++axis)
-  {
-    voxels *= std::max(0.0, static_cast<double>(extent[2 * axis + 1]) - extent[2 * axis] + 1.0);
-  }
-  int scalarType = VTK_DOUBLE;
-  int components = 1;
-  if (vtkInformation* scalars = vtkDataObject::GetActiveFieldInformation(
-        outInfo, vtkDataObject::FIELD_ASSOCIATION_POINTS, vtkDataSetAttributes::SCALARS))
-  {
-    scalarType = scalars->Has(vtkDataObject::FIELD_ARRAY_TYPE())
-      ? scalars->Get(vtkDataObject::FIELD_ARRAY_TYPE())
-      : scalarType;
-    components = scalars->Has(vtkDataObject::FIELD_NUMBER_OF_COMPONENTS())
-      ? std::max(1, scalars->Get(vtkDataObject::FIELD_NUMBER_OF_COMPONENTS()))
-      : components;
-  }
-  const double needed = voxels * (vtkDataArray::GetDataTypeSize(scalarType) * components + 2.0);
-  const double available = AvailableMemoryBytes();
-  if (available > 0.0 && needed > available)
-  {
-    std::ostringstream message;
-    message << context << ": the header promises " << extent[1] - extent[0] + 1 << " x "
-            << extent[3] - extent[2] + 1 << " x " << extent[5] - extent[4] + 1
-            << " voxels; reading and meshing them needs at least " << GiB(needed)
-            << ", and this machine has " << GiB(available)
-            << " available (crop or downsample the image)";
-    throw Failure(message.str());
-  }
-}
-
-/// A MetaImage header is text: "Key = Value" lines, with NDims among them and ElementDataFile
-/// last, before the voxels (.mha) or alone (.mhd).
-bool LooksLikeMetaImageHeader(const std::string& path)
-{
-  std::ifstream file(path, std::ios::binary);
-  std::string header(8192, '\0');
-  file.read(&header[0], static_cast<std::streamsize>(header.size()));
-  header.resize(static_cast<std::size_t>(file.gcount()));
-  const std::size_t dataFile = header.find("ElementDataFile");
-  const std::size_t dimensions = header.find("NDims");
-  return dataFile != std::string::npos && dimensions != std::string::npos &&
-    dimensions < dataFile && header.find('\0') > dataFile;
-}
-
-template <class Reader>
-vtkSmartPointer<vtkAlgorithm> CreateCheckedReader(
-  const std::string& path, const char* formatName, const std::string& context)
-{
-  vtkSmartPointer<Reader> reader = vtkSmartPointer<Reader>::New();
-  Watch(reader);
-  // vtkMetaImageReader::CanReadFile wants a lower-case .mha or .mhd, which stmesh does not.
-  const bool canRead = (std::is_same<Reader, vtkMetaImageReader>::value &&
-                         !EndsWith(path, ".mha") && !EndsWith(path, ".mhd"))
-    ? LooksLikeMetaImageHeader(path)
-    : reader->CanReadFile(path.c_str()) != 0;
-  if (!canRead)
-  {
-    std::string details = Errors().HasErrors() ? "\n" + Errors().Take() : std::string();
-    throw Failure(context + ": not a valid " + formatName + " file (" + reader->GetClassName() +
-      " cannot read it)" + details);
-  }
-  ThrowIfFailed(context);
-  reader->SetFileName(path.c_str());
-  return reader;
-}
-
-/// Read the label image (labelImage) or the gray image of --separating gray; the returned copy
-/// no longer depends on the reader.
+/// Read the label image (labelImage) or the gray image of --separating gray.
 vtkSmartPointer<vtkImageData> ReadImage(
   const std::string& path, ImageInfo& info, StageReport& report, bool labelImage = true)
 {
-  const std::string context = "reading '" + path + "'";
-  const ImageFormatInfo* format = FindImageFormat(path);
-  CheckReadableFile(path, !labelImage);
-
-  vtkSmartPointer<vtkAlgorithm> reader;
-  StandardErrorCapture strayMessages;
-  switch (format->Format)
+  vtkSmartPointer<vtkImageData> image =
+    stmesh::ReadImage(path, labelImage ? ImageRole::Labels : ImageRole::Gray, info, report.Seconds);
+  if (labelImage && !stmImageToSpacetree::IsLabelType(ImageValues(image, info)->GetDataType()))
   {
-    case ImageFormat::NIfTI:
-      reader = CreateCheckedReader<vtkNIFTIImageReader>(path, "NIfTI", context);
-      break;
-    case ImageFormat::MetaImage:
-      reader = CreateCheckedReader<vtkMetaImageReader>(path, "MetaImage", context);
-      break;
-    case ImageFormat::NRRD:
-      reader = CreateCheckedReader<vtkNrrdReader>(path, "NRRD", context);
-      break;
-    case ImageFormat::VTKImage:
-      reader = CreateCheckedReader<vtkXMLImageDataReader>(path, "VTK XML image", context);
-      break;
-  }
-  info.Format = ImageFormatName(format->Format);
-  CheckImageFitsInMemory(reader, context);
-
-  report.Seconds = TimedUpdate(reader);
-  const std::string strayText = strayMessages.GetText();
-  if (!strayText.empty())
-  {
-    Errors().Record(strayText, false);
-  }
-  ThrowIfFailed(context);
-
-  vtkImageData* image = vtkImageData::SafeDownCast(reader->GetOutputDataObject(0));
-  if (!image || image->GetNumberOfPoints() == 0)
-  {
-    throw Failure(context + ": the file holds no image data");
-  }
-  image->GetDimensions(info.Dimensions);
-  image->GetSpacing(info.Spacing);
-  // The spacetree filter reads the active scalars, point data first; stmSeparatingFunction the
-  // active point scalars only.
-  vtkDataArray* labels = image->GetPointData()->GetScalars();
-  vtkIdType expectedValues = image->GetNumberOfPoints();
-  if (!labels && !labelImage)
-  {
-    throw Failure(context + ": the gray image has no point scalars (one gray value per voxel)");
-  }
-  if (!labels)
-  {
-    labels = image->GetCellData()->GetScalars();
-    expectedValues = image->GetNumberOfCells();
-    info.CellLabels = true;
-  }
-  for (int axis = 0; axis < 3; ++axis)
-  {
-    info.VoxelDimensions[axis] =
-      info.CellLabels ? std::max(1, info.Dimensions[axis] - 1) : info.Dimensions[axis];
-    if (info.VoxelDimensions[axis] > 1)
-    {
-      info.SpannedAxes.push_back(axis);
-    }
-  }
-  if (!labels)
-  {
-    throw Failure(context + ": the image has no scalar (label) array");
-  }
-  if (labels->GetNumberOfTuples() != expectedValues)
-  {
-    throw Failure(context + ": the image has " + std::to_string(expectedValues) + " voxels but " +
-      std::to_string(labels->GetNumberOfTuples()) + " values (truncated file?)");
-  }
-  info.ScalarType = labels->GetDataTypeAsString();
-  if (labels->GetNumberOfComponents() != 1)
-  {
-    throw Failure(context + ": the image has " + std::to_string(labels->GetNumberOfComponents()) +
-      " components per voxel; stmesh needs one " + (labelImage ? "integer label" : "gray value") +
-      " per voxel");
-  }
-  if (labelImage && !stmImageToSpacetree::IsLabelType(labels->GetDataType()))
-  {
-    throw Failure(context + ": the image holds " + info.ScalarType +
+    throw Failure("reading '" + path + "': the image holds " + info.ScalarType +
       " values; stmesh needs an integer label image (a segmentation, not a gray-value image)");
   }
-  if (auto* nifti = vtkNIFTIImageReader::SafeDownCast(reader))
-  {
-    const double slope = nifti->GetRescaleSlope();
-    const double intercept = nifti->GetRescaleIntercept();
-    if ((slope != 0.0 && slope != 1.0) || intercept != 0.0)
-    {
-      Diagnostics() << "stmesh: warning: " << path << ": scl_slope " << slope << " and scl_inter "
-                    << intercept << " are ignored; the " << (labelImage ? "labels" : "gray values")
-                    << " are the stored values\n";
-    }
-  }
-
-  vtkSmartPointer<vtkImageData> copy = vtkSmartPointer<vtkImageData>::New();
-  copy->ShallowCopy(image);
   report.Points = static_cast<long long>(image->GetNumberOfPoints());
   RecordResources(report);
   std::ostringstream description;
   description << info.Dimensions[0] << " x " << info.Dimensions[1] << " x " << info.Dimensions[2]
               << " voxels, " << info.ScalarType;
   report.Description = description.str();
-  return copy;
+  return image;
 }
 
 //------------------------------------------------------------------------------------------------
 // --merge: the label array with the sources of every group replaced by its target.
-
-/// The label array of an image read by ReadImage: the point scalars, else the cell scalars.
-vtkDataArray* LabelArray(vtkImageData* image, const ImageInfo& info)
-{
-  return info.CellLabels ? image->GetCellData()->GetScalars() : image->GetPointData()->GetScalars();
-}
 
 /// Copies the labels into Output (an array of the same type), replacing every source of the
 /// table (sorted by source) by its target, and records which sources occur.
@@ -2552,7 +2006,7 @@ struct RemapLabels
 vtkSmartPointer<vtkImageData> MergeLabels(
   vtkImageData* image, const ImageInfo& info, const Options& options, const std::string& input)
 {
-  vtkDataArray* labels = LabelArray(image, info);
+  vtkDataArray* labels = ImageValues(image, info);
   std::vector<std::pair<long long, long long>> table;
   for (const MergeGroup& group : options.Merges)
   {
@@ -4396,7 +3850,7 @@ struct ReportImage
 ReportImage MakeReportImage(vtkImageData* image, const ImageInfo& info)
 {
   ReportImage result;
-  result.Labels = LabelArray(image, info);
+  result.Labels = ImageValues(image, info);
   result.SpannedAxes = info.SpannedAxes;
   result.VoxelMeasure = 1.0;
   for (const int axis : info.SpannedAxes)
@@ -5298,7 +4752,7 @@ int Run(const Options& options)
   }
   if (options.ReachesSnap() && options.Separating.Kind == SeparatingKind::Gray)
   {
-    CheckReadableFile(options.Separating.GrayImage, true);
+    CheckReadableFile(options.Separating.GrayImage, ImageRole::Gray);
   }
   CheckWritableTarget(output, "output");
   if (!options.Interfaces.empty())
@@ -5605,11 +5059,7 @@ int main(int argc, char* argv[])
   stmesh::RestartWithMallocTunables(argv);
   try
   {
-    Diagnostics(); // bind it to the real stderr before anything captures std::cerr
-    // VTK's logger would print every message a second time, in colour, on stderr.
-    vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
-    vtkNew<stmeshOutputWindow> outputWindow;
-    vtkOutputWindow::SetInstance(outputWindow);
+    stmesh::InstallErrorCapture();
     for (int signalNumber : { SIGINT, SIGTERM, SIGHUP })
     {
       std::signal(signalNumber, RemovePendingTemporaryAndExit);
