@@ -655,6 +655,15 @@ def case_error_corrupt_other_formats(c):
     c.run_failing([detached, "-o", c.path("out.vtu")], 1,
                   "the MetaImage header's data file '%s' cannot be read" % c.path("nowhere.raw"),
                   output=c.path("out.vtu"))
+    # Several data files (LIST, a pattern): MetaIO freed what it never allocated on a corrupt
+    # list (found by FuzzImageReading).
+    listed = c.path("listed.mhd")
+    with open(listed, "wb") as image_file:
+        image_file.write(b"ObjectType = Image\nNDims = 3\nDimSize = 4 3 2\n"
+                         b"ElementType = MET_UCHAR\nElementDataFile = LIST\nslice0.raw\n")
+    c.run_failing([listed, "-o", c.path("out.vtu")], 1,
+                  "the MetaImage header's ElementDataFile = LIST names several files",
+                  output=c.path("out.vtu"))
 
 
 def case_error_float_image(c):

@@ -23,7 +23,6 @@ import xml.etree.ElementTree as ET
 
 import spacetreemesh
 from vtkmodules.vtkCommonDataModel import vtkDataObject, vtkDataSetAttributes
-from vtkmodules.vtkIOImage import vtkNIFTIImageReader
 
 import stmtesting as T
 
@@ -115,8 +114,6 @@ def text_of(element):
 
 
 def new_instance(class_name):
-    if class_name == "vtkNIFTIImageReader":
-        return vtkNIFTIImageReader()
     cls = getattr(spacetreemesh, class_name, None)
     if cls is None:
         problem("class %s is not in the spacetreemesh package" % class_name)

@@ -4,8 +4,9 @@
 #include "stmeshErrors.h"
 #include "stmeshText.h"
 
+#include "stmNIFTIHeader.h" // shared with the plugin's NIfTI reader
+
 #include <sys/stat.h>
-#include <zlib.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -124,74 +125,10 @@ bool IsIntegerFilePattern(const std::string& format)
 
 void CheckNiftiHeader(const std::string& path, const std::string& context)
 {
-  unsigned char header[540] = {};
-  const gzFile file = gzopen(path.c_str(), "rb"); // reads plain files as they are
-  if (!file)
+  const std::string problem = stm::NIFTIHeaderProblem(path);
+  if (!problem.empty())
   {
-    return;
-  }
-  const int length = gzread(file, header, sizeof(header));
-  gzclose(file);
-  if (length < 4)
-  {
-    return;
-  }
-  auto integer = [&](int offset, int bytes, bool swap)
-  {
-    std::uint64_t value = 0;
-    for (int b = 0; b < bytes; ++b)
-    {
-      const int at = swap ? offset + b : offset + bytes - 1 - b;
-      value = (value << 8) | header[at];
-    }
-    // Sign-extend the field.
-    const int unused = 64 - 8 * bytes;
-    return static_cast<std::int64_t>(value << unused) >> unused;
-  };
-  bool swap = false;
-  int version = 0;
-  for (const bool swapped : { false, true })
-  {
-    const std::int64_t size = integer(0, 4, swapped);
-    if (size == 348 || size == 540)
-    {
-      swap = swapped;
-      version = size == 348 ? 1 : 2;
-      break;
-    }
-  }
-  if (version == 0 || length < (version == 1 ? 348 : 540))
-  {
-    return;
-  }
-  const std::int64_t datatype = integer(version == 1 ? 70 : 12, 2, swap);
-  const std::int64_t bitpix = integer(version == 1 ? 72 : 14, 2, swap);
-  const std::int64_t dimensions = version == 1 ? integer(40, 2, swap) : integer(16, 8, swap);
-  struct Type
-  {
-    int Code;
-    int Bits;
-  };
-  static constexpr Type Types[] = { { 1, 1 }, { 2, 8 }, { 4, 16 }, { 8, 32 }, { 16, 32 },
-    { 32, 64 }, { 64, 64 }, { 128, 24 }, { 256, 8 }, { 512, 16 }, { 768, 32 }, { 1024, 64 },
-    { 1280, 64 }, { 1536, 128 }, { 1792, 128 }, { 2048, 256 }, { 2304, 32 } };
-  const Type* type = std::find_if(
-    std::begin(Types), std::end(Types), [&](const Type& known) { return known.Code == datatype; });
-  if (type == std::end(Types))
-  {
-    throw Failure(context + ": the NIfTI header's datatype " + std::to_string(datatype) +
-      " is not a NIfTI type (a corrupt header)");
-  }
-  if (bitpix != type->Bits)
-  {
-    throw Failure(context + ": the NIfTI header's bitpix " + std::to_string(bitpix) +
-      " does not match its datatype " + std::to_string(datatype) + " (" +
-      std::to_string(type->Bits) + " bits; a corrupt header)");
-  }
-  if (dimensions < 1 || dimensions > 7)
-  {
-    throw Failure(context + ": the NIfTI header's dim[0] is " + std::to_string(dimensions) +
-      ", not 1 to 7 (a corrupt header)");
+    throw Failure(context + ": " + problem);
   }
 }
 
@@ -225,10 +162,18 @@ void CheckMetaImageHeader(const std::string& path, const std::string& context)
       "; VTK's MetaImage reader reads 1 to 3 dimensions (write the image with at most 3 axes, "
       "or as NIfTI)");
   }
-  // LOCAL: the voxels follow the header; LIST and file patterns ("%03d") name several files.
+  // LOCAL: the voxels follow the header. LIST and file patterns ("%03d") name several files,
+  // and MetaIO frees what it never allocated on some of those lists (found by
+  // FuzzImageReading): one data file only.
   const std::string upper = ToUpper(dataFile);
-  if (dataFile.empty() || upper == "LOCAL" || upper.rfind("LIST", 0) == 0 ||
-    dataFile.find('%') != std::string::npos || dataFile.find(' ') != std::string::npos)
+  if (upper.rfind("LIST", 0) == 0 || dataFile.find('%') != std::string::npos)
+  {
+    throw Failure(context + ": the MetaImage header's ElementDataFile = " +
+      dataFile.substr(0, 40) +
+      " names several files; stmesh reads MetaImage voxels from one file (LOCAL or a file "
+      "name)");
+  }
+  if (dataFile.empty() || upper == "LOCAL")
   {
     return;
   }

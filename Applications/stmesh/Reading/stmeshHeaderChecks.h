@@ -18,7 +18,7 @@ namespace stmesh
 /// bitpix of that datatype, dim[0] from 1 to 7. A file that is neither is left to VTK.
 void CheckNiftiHeader(const std::string& path, const std::string& context);
 
-/// MetaImage: NDims from 1 to 3, and the data file of a detached header readable.
+/// MetaImage: NDims from 1 to 3, and the voxels in the file or in one readable data file.
 void CheckMetaImageHeader(const std::string& path, const std::string& context);
 
 /// NRRD: the magic line, known fields written "field: value" once each (comments and

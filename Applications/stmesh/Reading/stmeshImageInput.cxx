@@ -52,6 +52,19 @@ const ImageFormatInfo ImageExtensions[] = { { ".nii.gz", ImageFormat::NIfTI },
 constexpr double MaximumDeflateRatio = 1032.0;
 constexpr double MaximumXMLCompressionRatio = 1e5;
 
+/// "X x Y x Z" of a whole extent, in 64 bits: a corrupt header's extent may span 2^31 voxels
+/// (found by FuzzImageReading: the int sum overflowed).
+std::string ExtentSizes(const int (&extent)[6])
+{
+  std::ostringstream text;
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    text << (axis > 0 ? " x " : "")
+         << static_cast<long long>(extent[2 * axis + 1]) - extent[2 * axis] + 1;
+  }
+  return text.str();
+}
+
 /// Refuses, before any voxel is read, an image whose header promises more voxels than memory
 /// holds, or than the file could hold: VTK's readers allocate the whole image first, and abort
 /// the process when that fails (a NIfTI header of 30000^3 voxels), or allocate gigabytes for a
@@ -112,8 +125,7 @@ void CheckImageSize(
   if (available > 0.0 && needed > available)
   {
     std::ostringstream message;
-    message << context << ": the header promises " << extent[1] - extent[0] + 1 << " x "
-            << extent[3] - extent[2] + 1 << " x " << extent[5] - extent[4] + 1
+    message << context << ": the header promises " << ExtentSizes(extent)
             << " voxels; reading and meshing them needs at least " << GiB(needed)
             << ", and this machine has " << GiB(available)
             << " available (crop or downsample the image)";
@@ -128,8 +140,7 @@ void CheckImageSize(
     voxelBytes > ratio * static_cast<double>(file.st_size))
   {
     std::ostringstream message;
-    message << context << ": the header promises " << extent[1] - extent[0] + 1 << " x "
-            << extent[3] - extent[2] + 1 << " x " << extent[5] - extent[4] + 1 << " voxels ("
+    message << context << ": the header promises " << ExtentSizes(extent) << " voxels ("
             << std::fixed << std::setprecision(0) << voxelBytes << " bytes), more than a file of "
             << file.st_size << " bytes can hold even compressed (corrupt header or truncated file)";
     throw Failure(message.str());
