@@ -636,8 +636,23 @@ def case_error_corrupt_other_formats(c):
     with open(negative, "wb") as image_file:
         image_file.write(b"ObjectType = Image\nNDims = 3\nDimSize = 4 -3 2\n"
                          b"ElementType = MET_UCHAR\nElementDataFile = LOCAL\n" + bytes(24))
-    c.run_failing([negative, "-o", c.path("out.vtu")], 1, "the header gives axis 1 a size of -3",
+    c.run_failing([negative, "-o", c.path("out.vtu")], 1,
+                  "the MetaImage header's DimSize = 4 -3 2 is not 3 positive integers",
                   output=c.path("out.vtu"))
+    # Sizing keys that disagree made MetaIO write past VTK's buffer (found by
+    # FuzzImageReading): a key given twice, more sizes than NDims, several channels.
+    for name, header, expected in [
+            ("twice.mha", b"NDims = 3\nNDims = 1\nDimSize = 4 3 2\n",
+             "the MetaImage header gives NDims a second time"),
+            ("sizes.mha", b"NDims = 1\nDimSize = 24 1 1\n",
+             "the MetaImage header's DimSize = 24 1 1 is not 1 positive integers"),
+            ("channels.mha", b"NDims = 3\nElementNumberOfChannels = 3\nDimSize = 4 3 2\n",
+             "ElementNumberOfChannels = 3; stmesh reads one value per voxel")]:
+        with open(c.path(name), "wb") as image_file:
+            image_file.write(b"ObjectType = Image\n" + header +
+                             b"ElementType = MET_UCHAR\nElementDataFile = LOCAL\n" + bytes(72))
+        c.run_failing([c.path(name), "-o", c.path("out.vtu")], 1, expected,
+                      output=c.path("out.vtu"))
     # A MetaImage of 4 dimensions made MetaIO write past VTK's buffer (a heap overflow under
     # AddressSanitizer), and a detached header whose data file is missing made it leak: both
     # refused before VTK reads them (found by FuzzImageReading).

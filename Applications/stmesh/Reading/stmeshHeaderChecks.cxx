@@ -134,10 +134,18 @@ void CheckNiftiHeader(const std::string& path, const std::string& context)
 
 void CheckMetaImageHeader(const std::string& path, const std::string& context)
 {
+  // The keys that size the voxels VTK allocates and MetaIO reads. MetaIO overflows VTK's
+  // buffer when they disagree (found by FuzzImageReading: NDims given twice, a DimSize of
+  // more numbers than NDims, three channels), so each may appear once, NDims first, with
+  // DimSize and ElementSpacing one number per axis and a single channel.
+  static const char* const SizingKeys[] = { "NDims", "DimSize", "ElementSpacing", "ElementSize",
+    "ElementNumberOfChannels", "ElementType", "ElementDataFile", "HeaderSize", "CompressedData",
+    "CompressedDataSize", "BinaryData", "ElementByteOrderMSB", "BinaryDataByteOrderMSB" };
   std::ifstream file(path, std::ios::binary);
   std::string line;
   long long dimensions = 0;
   std::string dataFile;
+  std::vector<std::string> seen;
   for (int lines = 0; lines < 1000 && dataFile.empty() && std::getline(file, line); ++lines)
   {
     const std::size_t equals = line.find('=');
@@ -147,20 +155,57 @@ void CheckMetaImageHeader(const std::string& path, const std::string& context)
     }
     const std::string key = Trim(line.substr(0, equals));
     const std::string value = Trim(line.substr(equals + 1));
-    if (key == "NDims" && !ParseInteger(value, dimensions))
+    if (std::find(std::begin(SizingKeys), std::end(SizingKeys), key) == std::end(SizingKeys))
     {
-      dimensions = 0;
+      continue;
+    }
+    if (std::find(seen.begin(), seen.end(), key) != seen.end())
+    {
+      throw Failure(
+        context + ": the MetaImage header gives " + key + " a second time (a corrupt header)");
+    }
+    seen.push_back(key);
+    if (key == "NDims")
+    {
+      if (!ParseInteger(value, dimensions) || dimensions < 1 || dimensions > 3)
+      {
+        throw Failure(context + ": MetaImage NDims = " + value.substr(0, 20) +
+          "; VTK's MetaImage reader reads 1 to 3 dimensions (write the image with at most 3 "
+          "axes, or as NIfTI)");
+      }
+    }
+    else if (key == "DimSize" || key == "ElementSpacing" || key == "ElementSize")
+    {
+      const std::vector<std::string> tokens = Tokens(value);
+      bool valid = dimensions > 0 && static_cast<long long>(tokens.size()) == dimensions;
+      for (std::size_t axis = 0; valid && axis < tokens.size(); ++axis)
+      {
+        long long size = 0;
+        double number = 0.0;
+        valid = key == "DimSize" ? ParseInteger(tokens[axis], size) && size >= 1
+                                 : ParseNumber(tokens[axis], number);
+      }
+      if (!valid)
+      {
+        throw Failure(context + ": the MetaImage header's " + key + " = " + value.substr(0, 40) +
+          " is not " + (dimensions > 0 ? std::to_string(dimensions) : std::string("NDims")) +
+          (key == "DimSize" ? " positive integers" : " numbers") +
+          (dimensions > 0 ? "" : " (NDims must come first)") + " (a corrupt header)");
+      }
+    }
+    else if (key == "ElementNumberOfChannels" && value != "1")
+    {
+      throw Failure(context + ": the MetaImage header's ElementNumberOfChannels = " +
+        value.substr(0, 20) + "; stmesh reads one value per voxel");
     }
     else if (key == "ElementDataFile")
     {
       dataFile = value;
     }
   }
-  if (dimensions < 1 || dimensions > 3)
+  if (dimensions < 1)
   {
-    throw Failure(context + ": MetaImage NDims = " + std::to_string(dimensions) +
-      "; VTK's MetaImage reader reads 1 to 3 dimensions (write the image with at most 3 axes, "
-      "or as NIfTI)");
+    throw Failure(context + ": the MetaImage header has no NDims (a corrupt header)");
   }
   // LOCAL: the voxels follow the header. LIST and file patterns ("%03d") name several files,
   // and MetaIO frees what it never allocated on some of those lists (found by
@@ -168,8 +213,7 @@ void CheckMetaImageHeader(const std::string& path, const std::string& context)
   const std::string upper = ToUpper(dataFile);
   if (upper.rfind("LIST", 0) == 0 || dataFile.find('%') != std::string::npos)
   {
-    throw Failure(context + ": the MetaImage header's ElementDataFile = " +
-      dataFile.substr(0, 40) +
+    throw Failure(context + ": the MetaImage header's ElementDataFile = " + dataFile.substr(0, 40) +
       " names several files; stmesh reads MetaImage voxels from one file (LOCAL or a file "
       "name)");
   }
