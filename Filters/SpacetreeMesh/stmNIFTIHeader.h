@@ -19,8 +19,9 @@ namespace stm
 {
 
 /// "" when the header is fine or not NIfTI at all (VTK refuses those itself), else why it is
-/// corrupt: a datatype NIfTI does not define, a bitpix that does not match the datatype, or a
-/// dim[0] outside 1 to 7. NIfTI-1 and NIfTI-2, either byte order, .nii or .nii.gz.
+/// corrupt: a datatype NIfTI does not define, a bitpix that does not match the datatype, a
+/// dim[0] outside 1 to 7, or an axis below it of no positive size. NIfTI-1 and NIfTI-2, either byte
+/// order, .nii or .nii.gz.
 inline std::string NIFTIHeaderProblem(const std::string& path)
 {
   unsigned char header[540] = {};
@@ -86,6 +87,17 @@ inline std::string NIFTIHeaderProblem(const std::string& path)
   {
     return "the NIfTI header's dim[0] is " + std::to_string(dimensions) +
       ", not 1 to 7 (a corrupt header)";
+  }
+  // An axis of size 0 below dim[0] made VTK's reader divide by zero (found by fuzzing).
+  for (int axis = 1; axis <= dimensions; ++axis)
+  {
+    const std::int64_t size =
+      version == 1 ? integer(40 + 2 * axis, 2, swap) : integer(16 + 8 * axis, 8, swap);
+    if (size < 1)
+    {
+      return "the NIfTI header's dim[" + std::to_string(axis) + "] is " + std::to_string(size) +
+        ", not a positive size (a corrupt header)";
+    }
   }
   return std::string();
 }

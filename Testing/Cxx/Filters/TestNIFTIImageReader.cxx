@@ -108,19 +108,26 @@ TEST(NIFTIImageReader, RefusesCorruptHeadersWithAnError)
     short Datatype;
     short Bitpix;
     short Dimensions;
+    int EmptyAxis; // an axis set to size 0 (0: none)
     const char* Expected;
   };
-  // The atlas is datatype 2 (unsigned char), bitpix 8, dim[0] 3.
+  // The atlas is datatype 2 (unsigned char), bitpix 8, dim 3 181 217 181 1 1 1 1.
   const Case cases[] = {
-    { "datatype.nii", 28261, 8, 3, "the NIfTI header's datatype 28261 is not a NIfTI type" },
-    { "bitpix.nii", 2, 16, 3,
+    { "datatype.nii", 28261, 8, 3, 0, "the NIfTI header's datatype 28261 is not a NIfTI type" },
+    { "bitpix.nii", 2, 16, 3, 0,
       "the NIfTI header's bitpix 16 does not match its datatype 2 (8 bits" },
-    { "dimensions.nii", 2, 8, 9, "the NIfTI header's dim[0] is 9, not 1 to 7" },
+    { "dimensions.nii", 2, 8, 9, 0, "the NIfTI header's dim[0] is 9, not 1 to 7" },
+    // VTK's reader divided by zero on an axis of size 0 below dim[0] (here dim[0] = 5).
+    { "empty-axis.nii", 2, 8, 5, 5, "the NIfTI header's dim[5] is 0, not a positive size" },
   };
   for (const Case& c : cases)
   {
     std::vector<char> bytes = atlas;
     SetShort(bytes, 40, c.Dimensions);
+    if (c.EmptyAxis > 0)
+    {
+      SetShort(bytes, 40 + 2 * c.EmptyAxis, 0);
+    }
     SetShort(bytes, 70, c.Datatype);
     SetShort(bytes, 72, c.Bitpix);
     for (const bool gzip : { false, true })
