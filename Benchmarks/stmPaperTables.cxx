@@ -113,6 +113,7 @@ vtkSmartPointer<vtkUnstructuredGrid> UniformBox(int n)
   vtkNew<stmImageToSpacetree> tree;
   tree->SetInputData(image);
   tree->SetMaxCellSize(1);
+  tree->SetThinPartRefinement(stmImageToSpacetree::NO_THIN_PARTS); // the paper's uniform lattice
   vtkNew<stmSpacetreeTessellate> tessellate;
   tessellate->SetInputConnection(tree->GetOutputPort());
   tessellate->SetSeparatingFunction(stmSpacetreeTessellate::NO_FUNCTION);

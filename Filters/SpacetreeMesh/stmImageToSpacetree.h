@@ -178,9 +178,10 @@ public:
    * lose or pinch off: voxels whose material is the strict majority at none of their corners,
    * and pairs of same-material neighbours whose shared face has no such corner (one-voxel
    * specks, lines and layers). Their centres and face centres become mesh points, so the cut
-   * keeps a piece of every connected component. NO_THIN_PARTS (the default), THIN_BODY_PARTS
-   * (body against background, for stmMarchingSimplices) or THIN_MATERIAL_PARTS (every
-   * material, for stmMultiMaterialCut). Skipped, with a warning, when the refined lattice
+   * keeps a piece of every connected component. NO_THIN_PARTS (for a staircase mesh, which
+   * keeps every voxel anyway), THIN_BODY_PARTS (the default: body against background, for
+   * stmMarchingSimplices at the labels function, the default pipeline) or THIN_MATERIAL_PARTS
+   * (every material, for stmMultiMaterialCut). Skipped, with a warning, when the refined lattice
    * would be too large. In either mode, the voxels at a convex corner or edge of their material
    * also get leaves of one voxel (NumberOfMinorityCornerVoxels).
    */
@@ -233,7 +234,7 @@ protected:
   double RegionBandWidth = 0;
   double Grading = 0;
   bool UseSizingArray = false;
-  int ThinPartRefinement = NO_THIN_PARTS;
+  int ThinPartRefinement = THIN_BODY_PARTS;
   vtkIdType NumberOfThinVoxels = 0;
   vtkIdType NumberOfMinorityCornerVoxels = 0;
 

@@ -25,7 +25,7 @@ bool Balance(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry,
   stmSMPExecutor& executor, vtkUnstructuredGrid* output, std::string& error)
 {
   stm::Spacetree<Dim> tree;
-  if (!stmSpacetreeData::ReadSpacetree<Dim>(input, tree, error))
+  if (!stmSpacetreeData::ReadSpacetree<Dim>(input, tree, error) || executor.ShouldAbort())
   {
     return false;
   }

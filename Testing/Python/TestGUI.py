@@ -19,13 +19,14 @@ balanced = SpacetreeBalance(Input=tree)  # noqa: F821
 tessellated = SpacetreeTessellate(Input=balanced)  # noqa: F821
 tessellated.UpdatePipeline()
 cells = tessellated.GetDataInformation().GetNumberOfCells()
-# AAL, MaxCellSize 16, BalanceLevel 1, checkerboard template, one automatic background layer for
-# the default separating function.
-assert cells == 6217419, cells
+# AAL, MaxCellSize 16, thin body parts refined, BalanceLevel 1, checkerboard template, one
+# automatic background layer for the default separating function: the tessellation stmesh's
+# default run makes of the brain mask.
+assert cells == 6635905, cells
 cut = MarchingSimplices(Input=tessellated)  # noqa: F821
 cut.UpdatePipeline()
 cells = cut.GetDataInformation().GetNumberOfCells()
-assert cells == 7911505, cells
+assert cells == 8118405, cells
 mesh = MarchingSimplices(Input=tessellated, KeepSide="Inside")  # noqa: F821
 mesh.UpdatePipeline()
 

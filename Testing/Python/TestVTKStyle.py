@@ -30,6 +30,8 @@ def pipeline(source, balance=True, balance_level=1, face_only=False, template=No
              background=False, max_cell_size=None, pattern=None):
     """(tree filter, balance filter or None, tessellate filter), updated."""
     tree = spacetreemesh.stmImageToSpacetree()
+    # Staircase meshes on the voxel lattice: no leaves below a voxel for thin parts.
+    tree.SetThinPartRefinement(tree.NO_THIN_PARTS)
     if hasattr(source, "GetOutputPort"):
         tree.SetInputConnection(source.GetOutputPort())
     else:
@@ -207,6 +209,7 @@ jump_origin = (-0.5, -0.5, -0.5)
 unbalanced_filter = spacetreemesh.stmImageToSpacetree()
 unbalanced_filter.SetInputData(jump_image)
 unbalanced_filter.SetMaxCellSize(64)
+unbalanced_filter.SetThinPartRefinement(unbalanced_filter.NO_THIN_PARTS)
 unbalanced_filter.Update()
 unbalanced = unbalanced_filter.GetOutput()
 lo, hi = T.leaf_boxes(unbalanced, jump_origin, (1, 1, 1))

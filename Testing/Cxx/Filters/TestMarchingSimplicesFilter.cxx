@@ -294,6 +294,118 @@ TEST(MarchingSimplicesFilter, TwoDimensionalDiskAndOneSide)
   EXPECT_EQ(sharing.Edges, curve->GetNumberOfLines()); // a closed curve: as many points as segments
 }
 
+/// The cut mesh of the chain ImageToSpacetree, SpacetreeBalance, SpacetreeTessellate and
+/// MarchingSimplices, every filter at its defaults but the thin-part mode.
+vtkSmartPointer<vtkUnstructuredGrid> CutByTheDefaultChain(vtkImageData* image, int thinParts)
+{
+  vtkNew<stmImageToSpacetree> tree;
+  tree->SetInputData(image);
+  tree->SetThinPartRefinement(thinParts);
+  vtkNew<stmSpacetreeBalance> balance;
+  balance->SetInputConnection(tree->GetOutputPort());
+  vtkNew<stmSpacetreeTessellate> tessellate;
+  tessellate->SetInputConnection(balance->GetOutputPort());
+  vtkNew<stmMarchingSimplices> cut;
+  cut->SetInputConnection(tessellate->GetOutputPort());
+  cut->Update();
+  vtkSmartPointer<vtkUnstructuredGrid> mesh =
+    vtkUnstructuredGrid::SafeDownCast(cut->GetOutputDataObject(0));
+  return mesh;
+}
+
+/// The volume of the tetrahedra of material 1 whose centroid lies in the box [low, high].
+double BodyVolumeIn(vtkUnstructuredGrid* mesh, const double low[3], const double high[3])
+{
+  vtkDataArray* material = mesh->GetCellData()->GetArray("Material");
+  double volume = 0.0;
+  vtkNew<vtkIdList> ids;
+  for (vtkIdType c = 0; c < mesh->GetNumberOfCells(); ++c)
+  {
+    mesh->GetCellPoints(c, ids);
+    if (material->GetComponent(c, 0) != 1 || ids->GetNumberOfIds() != 4)
+    {
+      continue;
+    }
+    double p[4][3], centroid[3] = { 0, 0, 0 };
+    for (int corner = 0; corner < 4; ++corner)
+    {
+      mesh->GetPoint(ids->GetId(corner), p[corner]);
+      for (int axis = 0; axis < 3; ++axis)
+      {
+        centroid[axis] += p[corner][axis] / 4;
+      }
+    }
+    bool inBox = true;
+    for (int axis = 0; axis < 3; ++axis)
+    {
+      inBox = inBox && centroid[axis] >= low[axis] && centroid[axis] <= high[axis];
+    }
+    double e[3][3];
+    for (int edge = 0; edge < 3; ++edge)
+    {
+      for (int axis = 0; axis < 3; ++axis)
+      {
+        e[edge][axis] = p[edge + 1][axis] - p[0][axis];
+      }
+    }
+    const double det = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
+      e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+      e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+    volume += inBox ? std::abs(det) / 6 : 0.0;
+  }
+  return volume;
+}
+
+// The filters' defaults keep what a cut at the labels function would lose: an 8^3 block in a
+// corner of a 16^3 image (a coarse leaf there interpolates the corner's minority over its whole
+// size), and, in a 12^3 image, a single voxel and a plate one voxel thick. The same chain without
+// thin-part refinement loses them, which is why Thin Body Parts is ImageToSpacetree's default.
+TEST(MarchingSimplicesFilter, DefaultChainKeepsCornerBlocksSpecksAndThinPlates)
+{
+  EXPECT_EQ(
+    vtkNew<stmImageToSpacetree>()->GetThinPartRefinement(), stmImageToSpacetree::THIN_BODY_PARTS);
+  const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
+  const int blockDims[3] = { 16, 16, 16 };
+  auto block = stmTest::MakeLabelImage(
+    blockDims, spacing, origin, [](int i, int j, int k) { return i < 8 && j < 8 && k < 8; });
+  const int thinDims[3] = { 12, 12, 12 };
+  auto thin = stmTest::MakeLabelImage(thinDims, spacing, origin,
+    [](int i, int j, int k)
+    { return (i == 3 && j == 3 && k == 3) || (k == 8 && i > 1 && i < 10); });
+  const double everywhereLow[3] = { -1, -1, -1 }, everywhereHigh[3] = { 17, 17, 17 };
+  const double speckLow[3] = { 2, 2, 2 }, speckHigh[3] = { 4, 4, 4 };
+  const double plateLow[3] = { 1, -1, 7 }, plateHigh[3] = { 10, 12, 9 };
+
+  for (int thinParts : { stmImageToSpacetree::THIN_BODY_PARTS, stmImageToSpacetree::NO_THIN_PARTS })
+  {
+    const bool refined = thinParts != stmImageToSpacetree::NO_THIN_PARTS;
+    auto blockMesh = CutByTheDefaultChain(block, thinParts);
+    auto thinMesh = CutByTheDefaultChain(thin, thinParts);
+    for (vtkUnstructuredGrid* mesh : { blockMesh.Get(), thinMesh.Get() })
+    {
+      const stm::MeshInvariantReport report = stmTest::CheckMesh<3>(mesh, Axes3, 1e-9);
+      EXPECT_TRUE(report.IsValid()) << report.Summary();
+    }
+    const double blockVolume = BodyVolumeIn(blockMesh, everywhereLow, everywhereHigh);
+    const double speck = BodyVolumeIn(thinMesh, speckLow, speckHigh);
+    const double plate = BodyVolumeIn(thinMesh, plateLow, plateHigh);
+    std::cout << (refined ? "thin body parts" : "no thin parts") << ": corner block " << blockVolume
+              << " of 512, speck " << speck << " of 1, plate " << plate << " of 96\n";
+    if (refined)
+    {
+      EXPECT_GT(blockVolume, 0.9 * 512);
+      EXPECT_GT(speck, 0.1);
+      EXPECT_GT(plate, 0.9 * 96);
+    }
+    else // what the default prevents: the block and the speck are gone
+    {
+      EXPECT_EQ(blockVolume, 0.0);
+      EXPECT_EQ(speck, 0.0);
+      EXPECT_LT(plate, 0.7 * 96);
+    }
+  }
+}
+
 TEST(MarchingSimplicesFilter, BadInputGetsClearErrors)
 {
   const auto check = stmTest::ExpectErrorAndEmptyOutput;

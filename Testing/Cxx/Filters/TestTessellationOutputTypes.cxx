@@ -38,6 +38,8 @@ struct AalTrees
     this->Reader->SetFileName(AalPath);
     this->Reader->Update();
     this->Tree->SetInputConnection(this->Reader->GetOutputPort());
+    // Staircase meshes (no function): the counts below are those of voxel-sized leaves.
+    this->Tree->SetThinPartRefinement(stmImageToSpacetree::NO_THIN_PARTS);
     for (int level = 1; level <= 2; ++level)
     {
       this->Balance[level - 1]->SetInputConnection(this->Tree->GetOutputPort());

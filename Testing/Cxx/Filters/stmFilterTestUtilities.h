@@ -202,6 +202,8 @@ struct Pipeline
   vtkUnstructuredGrid* Run(vtkImageData* image, int balanceLevel, int cellTemplate = 0)
   {
     this->Tree->SetInputData(image);
+    // A staircase mesh keeps every voxel without the refinement a cut needs.
+    this->Tree->SetThinPartRefinement(stmImageToSpacetree::NO_THIN_PARTS);
     this->Balance->SetInputConnection(this->Tree->GetOutputPort());
     this->Balance->SetBalanceLevel(std::max(1, balanceLevel));
     this->Tessellate->SetCellTemplate(cellTemplate);
