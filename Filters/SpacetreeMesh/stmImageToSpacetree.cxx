@@ -238,6 +238,12 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
     {
       thin.clear();
     }
+    // The voxel tests read the whole image: a quarter of the build on the AAL atlas.
+    executor.ReportProgress(0.15);
+    if (executor.ShouldAbort())
+    {
+      return false;
+    }
   }
   // Voxels at minority corners get leaves of one voxel, or a coarse leaf there could lose its
   // material near the corner, or whole (see stm::MinorityCornerVoxels).
@@ -257,6 +263,12 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
     {
       minorityCorner.clear();
     }
+    executor.ReportProgress(0.3);
+    if (executor.ShouldAbort())
+    {
+      return false;
+    }
+    executor.StartRemainingProgressAt(0.3);
   }
   auto planLevels = [&](stm::RefinementPlan<Dim>& result)
   {

@@ -48,6 +48,13 @@ public:
       static_cast<vtkIdType>(grain), adapter);
   }
 
+  /// The work reported so far (a fraction of the current range) is done: later progress in
+  /// [0,1] lands in what is left of the range, so that it never goes back.
+  void StartRemainingProgressAt(double fraction)
+  {
+    this->ProgressBegin += (this->ProgressEnd - this->ProgressBegin) * fraction;
+  }
+
   bool ShouldAbort()
   {
     if (this->Aborted.load(std::memory_order_relaxed))
