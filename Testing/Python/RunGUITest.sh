@@ -14,7 +14,7 @@ export XDG_CONFIG_HOME="$STM_TEMP_DIR/config"
 rm -rf "$XDG_CONFIG_HOME"
 mkdir -p "$XDG_CONFIG_HOME/ParaView"
 printf '[General]\nGeneralSettings.ShowWelcomeDialog=0\n' >"$XDG_CONFIG_HOME/ParaView/ParaView5.11.0.ini"
-timeout 300 xvfb-run -a -s "-screen 0 1280x1024x24" "$paraview_executable" "$@" --exit
+timeout 300 bash "$(dirname "$0")/RunUnderXvfb.sh" "$paraview_executable" "$@" --exit
 status=$?
 if [ -f "$STM_GUI_MARKER.failure" ]; then
   cat "$STM_GUI_MARKER.failure"
