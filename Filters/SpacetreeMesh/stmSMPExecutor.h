@@ -4,9 +4,16 @@
  * @brief   runs the core's range kernels with vtkSMPTools (private to the module)
  *
  * The core algorithms are templates on an executor (see Filters/Core/Common/Execution.h). This
- * one maps For() onto vtkSMPTools::For with one vtkSMPThreadLocal scratch per thread, checks
- * the algorithm's abort flag from the single designated thread only, and reports progress from
- * the thread that runs RequestData, mapped into [ProgressBegin, ProgressEnd].
+ * one maps For() onto vtkSMPTools::For with one vtkSMPThreadLocal scratch per thread and
+ * reports progress, mapped into [ProgressBegin, ProgressEnd], from the thread that runs
+ * RequestData only: ParaView's progress handler, which is also where the GUI's abort arrives,
+ * is not thread-safe.
+ *
+ * VTK 9.2's STDThread backend never runs a chunk on the thread that calls vtkSMPTools::For: it
+ * waits for a pool of its own. So that progress and abort keep flowing inside parallel loops,
+ * For() then runs vtkSMPTools::For on a helper thread while the calling thread relays the
+ * latest progress the kernels reported, and polls the abort, every RelayInterval. On the
+ * Sequential backend the kernels run on the calling thread and report directly.
  */
 
 #ifndef stmSMPExecutor_h
@@ -17,7 +24,12 @@
 #include "vtkSMPTools.h"
 
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <cstdint>
+#include <cstring>
+#include <exception>
+#include <mutex>
 #include <thread>
 
 class stmSMPExecutor
@@ -34,6 +46,7 @@ public:
   {
     this->ProgressBegin = begin;
     this->ProgressEnd = end;
+    this->RelayedFraction = 0.0;
   }
 
   template <class Kernel>
@@ -44,8 +57,19 @@ public:
       return;
     }
     Adapter<Kernel> adapter{ &kernel, {} };
-    vtkSMPTools::For(static_cast<vtkIdType>(begin), static_cast<vtkIdType>(end),
-      static_cast<vtkIdType>(grain), adapter);
+    auto runLoop = [&]()
+    {
+      vtkSMPTools::For(static_cast<vtkIdType>(begin), static_cast<vtkIdType>(end),
+        static_cast<vtkIdType>(grain), adapter);
+    };
+    if (this->LoopRunsOffTheCallingThread())
+    {
+      this->RunWhileRelaying(runLoop);
+    }
+    else
+    {
+      runLoop();
+    }
   }
 
   /// The work reported so far (a fraction of the current range) is done: later progress in
@@ -53,6 +77,7 @@ public:
   void StartRemainingProgressAt(double fraction)
   {
     this->ProgressBegin += (this->ProgressEnd - this->ProgressBegin) * fraction;
+    this->RelayedFraction = 0.0;
   }
 
   bool ShouldAbort()
@@ -61,8 +86,9 @@ public:
     {
       return true;
     }
-    const bool designated =
-      vtkSMPTools::IsParallelScope() ? vtkSMPTools::GetSingleThread() : this->IsMainThread();
+    // While relaying, the calling thread polls the abort; the pool's threads only read the flag.
+    const bool designated = !this->Relaying.load(std::memory_order_relaxed) &&
+      (vtkSMPTools::IsParallelScope() ? vtkSMPTools::GetSingleThread() : this->IsMainThread());
     if (designated && this->Algorithm->CheckAbort())
     {
       this->Aborted = true;
@@ -74,10 +100,19 @@ public:
   {
     if (this->IsMainThread())
     {
-      this->Algorithm->UpdateProgress(
-        this->ProgressBegin + (this->ProgressEnd - this->ProgressBegin) * fraction);
+      this->UpdateProgressFromMainThread(fraction);
+      return;
+    }
+    // Threads finish chunks out of order: keep the largest fraction, so progress never goes back.
+    double seen = this->RelayedFraction.load(std::memory_order_relaxed);
+    while (fraction > seen &&
+      !this->RelayedFraction.compare_exchange_weak(seen, fraction, std::memory_order_relaxed))
+    {
     }
   }
+
+  /// How often the calling thread relays progress and polls the abort during a parallel loop.
+  static constexpr std::chrono::milliseconds RelayInterval{ 50 };
 
 private:
   template <class Kernel>
@@ -93,9 +128,75 @@ private:
 
   bool IsMainThread() const { return std::this_thread::get_id() == this->MainThread; }
 
+  bool LoopRunsOffTheCallingThread() const
+  {
+    const char* backend = vtkSMPTools::GetBackend();
+    // With one thread too: the pool then has one thread of its own.
+    return this->IsMainThread() && !vtkSMPTools::IsParallelScope() && backend &&
+      std::strcmp(backend, "STDThread") == 0;
+  }
+
+  void UpdateProgressFromMainThread(double fraction)
+  {
+    this->RelayedFraction.store(fraction, std::memory_order_relaxed);
+    this->Algorithm->UpdateProgress(
+      this->ProgressBegin + (this->ProgressEnd - this->ProgressBegin) * fraction);
+  }
+
+  template <class Loop>
+  void RunWhileRelaying(Loop& runLoop)
+  {
+    std::mutex mutex;
+    std::condition_variable finishedSignal;
+    bool finished = false;
+    std::exception_ptr failure;
+    this->Relaying = true;
+    std::thread helper(
+      [&]()
+      {
+        try
+        {
+          runLoop();
+        }
+        catch (...)
+        {
+          failure = std::current_exception();
+        }
+        std::lock_guard<std::mutex> lock(mutex);
+        finished = true;
+        finishedSignal.notify_one();
+      });
+    double relayed = this->RelayedFraction.load(std::memory_order_relaxed);
+    std::unique_lock<std::mutex> lock(mutex);
+    while (!finishedSignal.wait_for(lock, RelayInterval, [&] { return finished; }))
+    {
+      lock.unlock();
+      const double latest = this->RelayedFraction.load(std::memory_order_relaxed);
+      if (latest > relayed)
+      {
+        relayed = latest;
+        this->UpdateProgressFromMainThread(latest);
+      }
+      if (!this->Aborted.load(std::memory_order_relaxed) && this->Algorithm->CheckAbort())
+      {
+        this->Aborted = true;
+      }
+      lock.lock();
+    }
+    lock.unlock();
+    helper.join();
+    this->Relaying = false;
+    if (failure)
+    {
+      std::rethrow_exception(failure);
+    }
+  }
+
   vtkAlgorithm* Algorithm;
   std::thread::id MainThread;
   std::atomic<bool> Aborted{ false };
+  std::atomic<bool> Relaying{ false };
+  std::atomic<double> RelayedFraction{ 0.0 };
   double ProgressBegin = 0.0;
   double ProgressEnd = 1.0;
 };
