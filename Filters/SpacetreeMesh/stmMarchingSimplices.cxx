@@ -215,6 +215,13 @@ stm::Status CutVolume(CutRequest& request, stm::MarchingSimplices<Dim>& cutter,
   }
   AssemblePoints(
     input, cutter.GetCutEdges(), selection, request.FunctionName, request.Options.IsoValue, output);
+  // The output assembly takes a third of the run on the AAL brain mask: give the GUI a chance to
+  // abort in the middle of it.
+  request.Filter->UpdateProgress(0.9);
+  if (request.Filter->CheckAbort())
+  {
+    return stm::Status::Aborted();
+  }
 
   vtkSmartPointer<vtkCellArray> cellArray = fits32
     ? stmCutInput::FixedSizeCells<std::int32_t>(ids32, Dim + 1)
