@@ -31,8 +31,14 @@ stop_server() {
     xvfb_pid=""
   fi
 }
-trap 'stop_server; rm -rf "$work_dir"; exit 143' TERM
-trap 'stop_server; rm -rf "$work_dir"; exit 130' INT
+# Stops the server, removes the work folder and exits with status $1.
+finish() {
+  stop_server
+  rm -rf "$work_dir"
+  exit "$1"
+}
+trap 'finish 143' TERM
+trap 'finish 130' INT
 
 # Opens and closes one connection with Xlib, as every client here does.
 can_connect() {
@@ -81,8 +87,7 @@ done
 if [ -z "$display_number" ]; then
   echo "RunUnderXvfb: no virtual X server ($xvfb_executable) started in 8 attempts:" >&2
   cat "$log_file" >&2
-  rm -rf "$work_dir"
-  exit 1
+  finish 1
 fi
 
 export DISPLAY=":$display_number"
@@ -96,6 +101,4 @@ if [ "$status" -ne 0 ]; then
   echo "RunUnderXvfb: the command failed (status $status) on DISPLAY=$DISPLAY; the server said:" >&2
   cat "$log_file" >&2
 fi
-stop_server
-rm -rf "$work_dir"
-exit "$status"
+finish "$status"
