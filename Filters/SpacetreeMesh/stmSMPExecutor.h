@@ -20,6 +20,7 @@
 #define stmSMPExecutor_h
 
 #include "vtkAlgorithm.h"
+#include "vtkCommand.h"
 #include "vtkSMPThreadLocal.h"
 #include "vtkSMPTools.h"
 
@@ -62,7 +63,7 @@ public:
       vtkSMPTools::For(static_cast<vtkIdType>(begin), static_cast<vtkIdType>(end),
         static_cast<vtkIdType>(grain), adapter);
     };
-    if (this->LoopRunsOffTheCallingThread())
+    if (this->NeedsRelay(end - begin, grain))
     {
       this->RunWhileRelaying(runLoop);
     }
@@ -128,12 +129,18 @@ private:
 
   bool IsMainThread() const { return std::this_thread::get_id() == this->MainThread; }
 
-  bool LoopRunsOffTheCallingThread() const
+  /// True when the loop would run off the calling thread and somebody listens to progress (the
+  /// GUI's abort arrives at progress events). A helper thread costs tens of microseconds, and
+  /// MultiMaterialCut alone runs thousands of loops: stmesh, which does not listen, pays nothing.
+  bool NeedsRelay(std::int64_t size, std::int64_t grain) const
   {
+    // VTK 9.2's STDThread runs a loop of one grain inline, and every other one on its pool,
+    // also with one thread.
+    const bool pooled = grain <= 0 ? size > 1 : grain < size;
     const char* backend = vtkSMPTools::GetBackend();
-    // With one thread too: the pool then has one thread of its own.
-    return this->IsMainThread() && !vtkSMPTools::IsParallelScope() && backend &&
-      std::strcmp(backend, "STDThread") == 0;
+    return pooled && this->IsMainThread() && !vtkSMPTools::IsParallelScope() && backend &&
+      std::strcmp(backend, "STDThread") == 0 &&
+      this->Algorithm->HasObserver(vtkCommand::ProgressEvent);
   }
 
   void UpdateProgressFromMainThread(double fraction)
