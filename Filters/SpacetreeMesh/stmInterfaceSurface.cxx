@@ -81,8 +81,7 @@ stm::Status Extract(stmInterfaceSurface* filter, vtkUnstructuredGrid* input,
   output->GetPointData()->CopyAllocate(input->GetPointData(), kept->GetNumberOfIds());
   output->GetPointData()->CopyData(input->GetPointData(), kept, places);
   filter->UpdateProgress(0.9);
-  // On VTK's STDThread backend the kernels run on pool threads and report no progress, so this
-  // can be the first event an observer aborts at.
+  // An abort requested at this event stops here, before the facets are copied into the output.
   if (filter->CheckAbort())
   {
     return stm::Status::Aborted();

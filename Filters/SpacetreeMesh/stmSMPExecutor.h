@@ -112,10 +112,10 @@ public:
     }
   }
 
+private:
   /// How often the calling thread relays progress and polls the abort during a parallel loop.
   static constexpr std::chrono::milliseconds RelayInterval{ 50 };
 
-private:
   template <class Kernel>
   struct Adapter
   {
