@@ -11,6 +11,8 @@
 #ifndef stmCutInput_h
 #define stmCutInput_h
 
+#include "stmPieces.h"
+
 #include "vtkAlgorithm.h"
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
@@ -143,9 +145,10 @@ inline int SimplexDimension(vtkUnstructuredGrid* input, const char* remedy, std:
   return dimension;
 }
 
-/// The checks every simplicial filter makes first: -1 when an upstream filter was aborted (the
-/// filter then returns 1 with an empty output, quietly); 0 with `error` set when the input has
-/// no cells, or cells that are not all tetrahedra or all triangles (`remedy` says what to do);
+/// The checks every simplicial filter makes first: -1 when an upstream filter was aborted or the
+/// request is for an empty piece after the first (stmPieces.h) (the filter then returns 1 with an
+/// empty output, quietly); 0 with `error` set when the input has no cells, or cells that are not
+/// all tetrahedra or all triangles (`remedy` says what to do), or is a later piece with cells;
 /// else the dimension, 3 or 2.
 inline int Preflight(vtkInformationVector* inputVector, vtkUnstructuredGrid* input,
   const char* remedy, std::string& error)
@@ -154,6 +157,10 @@ inline int Preflight(vtkInformationVector* inputVector, vtkUnstructuredGrid* inp
   if (inInfo && inInfo->Get(vtkAlgorithm::ABORTED()))
   {
     return -1;
+  }
+  if (stmPieces::IsLaterPiece(inInfo, input, error))
+  {
+    return error.empty() ? -1 : 0;
   }
   if (!input || input->GetNumberOfCells() == 0 || !input->GetPoints())
   {

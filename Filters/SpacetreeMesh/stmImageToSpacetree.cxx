@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "stmImageToSpacetree.h"
 
+#include "stmPieces.h"
 #include "stmSMPExecutor.h"
 #include "stmSpacetreeData.h"
 
@@ -575,11 +576,24 @@ int stmImageToSpacetree::FillInputPortInformation(int, vtkInformation* info)
   return 1;
 }
 
+int stmImageToSpacetree::RequestUpdateExtent(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  stmPieces::RequestWholeImageOnFirstPiece(
+    outputVector->GetInformationObject(0), inputVector[0]->GetInformationObject(0));
+  return 1;
+}
+
 int stmImageToSpacetree::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   vtkImageData* input = vtkImageData::GetData(inputVector[0], 0);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
+  if (output && stmPieces::RequestedPiece(outputVector->GetInformationObject(0)) > 0)
+  {
+    output->Initialize(); // piece 0 meshes the whole image
+    return 1;
+  }
   if (!input || !output)
   {
     vtkErrorMacro("ImageToSpacetree needs a vtkImageData input.");

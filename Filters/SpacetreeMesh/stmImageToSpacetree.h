@@ -220,6 +220,9 @@ protected:
   ~stmImageToSpacetree() override;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
+  /// Under MPI: the whole image on piece 0, nothing on the others (stmPieces.h).
+  int RequestUpdateExtent(vtkInformation* request, vtkInformationVector** inputVector,
+    vtkInformationVector* outputVector) override;
   int RequestData(vtkInformation* request, vtkInformationVector** inputVector,
     vtkInformationVector* outputVector) override;
 

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "stmSeparatingFunction.h"
 
+#include "stmPieces.h"
 #include "stmSurfaceFunction.h"
 
 #include "vtkDataArray.h"
@@ -71,6 +72,14 @@ int stmSeparatingFunction::FillInputPortInformation(int port, vtkInformation* in
   return 1;
 }
 
+int stmSeparatingFunction::ComputeInputUpdateExtent(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  stmPieces::RequestWholeImageOnFirstPiece(
+    outputVector->GetInformationObject(0), inputVector[1]->GetInformationObject(0));
+  return 1;
+}
+
 namespace
 {
 /// f at every point from the gray image (stmSurfaceFunction: trilinear on the image's point
@@ -114,6 +123,12 @@ int stmSeparatingFunction::RequestData(
     vtkErrorMacro(<< "SeparatingFunction failed: " << message);
     return 0;
   };
+  std::string pieceError;
+  if (stmPieces::IsLaterPiece(inInfo, input, pieceError))
+  {
+    output->Initialize();
+    return pieceError.empty() ? 1 : fail(pieceError);
+  }
   if (!input || !input->GetPoints() || input->GetNumberOfPoints() == 0)
   {
     return fail("the input has no points");

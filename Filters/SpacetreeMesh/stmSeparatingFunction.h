@@ -89,6 +89,9 @@ protected:
   ~stmSeparatingFunction() override;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
+  /// Under MPI: the whole gray image on piece 0, nothing on the others (stmPieces.h).
+  int ComputeInputUpdateExtent(vtkInformation* request, vtkInformationVector** inputVector,
+    vtkInformationVector* outputVector) override;
   int RequestData(vtkInformation* request, vtkInformationVector** inputVector,
     vtkInformationVector* outputVector) override;
 

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "stmSpacetreeData.h"
 
+#include "stmPieces.h"
+
 #include "Common/LatticeBitset.h"
 #include "Spacetree/SpacetreeValidate.h"
 
@@ -190,11 +192,17 @@ bool BeginRequest(vtkAlgorithm* filter, vtkInformationVector* inputPort,
     requestResult = 1;
     return false;
   }
-  if (!input)
+  if (stmPieces::IsLaterPiece(info, input, error) && error.empty())
+  {
+    output->Initialize(); // piece 0 has the whole spacetree
+    requestResult = 1;
+    return false;
+  }
+  if (!input && error.empty())
   {
     error = "the input must be the vtkUnstructuredGrid output of ImageToSpacetree";
   }
-  if (input && ReadGeometry(input->GetFieldData(), geometry, error))
+  if (input && error.empty() && ReadGeometry(input->GetFieldData(), geometry, error))
   {
     return true;
   }

@@ -3,6 +3,7 @@
 
 #include "stmCutInput.h"
 #include "stmFunctionValues.h"
+#include "stmPieces.h"
 #include "stmPlaneFrame.h"
 #include "stmSMPExecutor.h"
 #include "stmSurfaceFunction.h"
@@ -185,6 +186,15 @@ int stmVertexSnap::FillInputPortInformation(int port, vtkInformation* info)
   }
   info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkUnstructuredGrid");
   return 1;
+}
+
+int stmVertexSnap::RequestUpdateExtent(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  const int result = this->Superclass::RequestUpdateExtent(request, inputVector, outputVector);
+  stmPieces::RequestWholeImageOnFirstPiece(
+    outputVector->GetInformationObject(0), inputVector[1]->GetInformationObject(0));
+  return result;
 }
 
 int stmVertexSnap::RequestData(

@@ -381,19 +381,25 @@ def is_hexahedral_spacetree(grid, dimension=3):
     return len(types) > 0 and bool(np.all(types == expected))
 
 
-def atlas_chain(path):
-    """The reader of the NIfTI image at path, and ImageToSpacetree, SpacetreeBalance and
-    SpacetreeTessellate after it, connected, all at their defaults and not yet updated. The
-    package is imported here, not at the top, so that a test can load the plugin first."""
+def spacetree_chain(source):
+    """ImageToSpacetree, SpacetreeBalance and SpacetreeTessellate after the image algorithm
+    source, connected, all at their defaults and not yet updated. The package is imported here,
+    not at the top, so that a test can load the plugin first."""
     import spacetreemesh
-    from vtkmodules.vtkIOImage import vtkNIFTIImageReader
 
-    reader = vtkNIFTIImageReader()
-    reader.SetFileName(path)
     tree = spacetreemesh.stmImageToSpacetree()
-    tree.SetInputConnection(reader.GetOutputPort())
+    tree.SetInputConnection(source.GetOutputPort())
     balance = spacetreemesh.stmSpacetreeBalance()
     balance.SetInputConnection(tree.GetOutputPort())
     tessellate = spacetreemesh.stmSpacetreeTessellate()
     tessellate.SetInputConnection(balance.GetOutputPort())
-    return reader, tree, balance, tessellate
+    return tree, balance, tessellate
+
+
+def atlas_chain(path):
+    """The reader of the NIfTI image at path and spacetree_chain after it."""
+    from vtkmodules.vtkIOImage import vtkNIFTIImageReader
+
+    reader = vtkNIFTIImageReader()
+    reader.SetFileName(path)
+    return (reader,) + spacetree_chain(reader)
