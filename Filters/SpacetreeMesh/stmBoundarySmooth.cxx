@@ -131,9 +131,11 @@ vtkSmartPointer<vtkAbstractArray> ExtendedCopy(vtkAbstractArray* source, vtkIdTy
 /// cell each was split from).
 template <int Dim, class IdType>
 stm::Status SplitEdges(SmoothRequest& request, const IdType* connectivity,
-  const std::vector<double>& local, const std::vector<std::int64_t>& materials,
-  stmSMPExecutor& executor)
+  const std::vector<double>& local, stmSMPExecutor& executor)
 {
+  // A 64-bit copy: InteriorEdgeSplit keeps 64-bit materials, and the smoother's records, the
+  // peak of the stage, are freed by now.
+  const std::vector<std::int64_t> materials = stmCutInput::CellMaterials(request.Input);
   vtkUnstructuredGrid* output = request.Output;
   const vtkIdType points = output->GetNumberOfPoints();
   const vtkIdType cells = output->GetNumberOfCells();
@@ -248,7 +250,6 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
   vtkPoints* inputPoints = input->GetPoints();
   const stmPlaneFrame& frame = request.Coordinates;
   std::vector<double> local = frame.CoreCoordinates<Dim>(inputPoints);
-  const std::vector<std::int64_t> materials = stmCutInput::CellMaterials(input);
   std::vector<std::int64_t> originals =
     request.Filter->GetRestoreOriginalVolumes() && request.Options.TargetVolumes.empty()
     ? stmCutInput::CellMaterials(input, "OriginalMaterial")
@@ -310,11 +311,14 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
     // Scoped: the smoother's incidence and cell records (AAL, 116 labels: 430 MB) are freed
     // before the output's arrays are made.
     stm::BoundarySmoother<Dim> smoother;
-    const std::int64_t* materialPointer = materials.empty() ? nullptr : materials.data();
-    const stm::Status status = function ? smoother.Smooth(local.data(), points, connectivity, cells,
-                                            materialPointer, request.Options, projector, executor)
-                                        : smoother.Smooth(local.data(), points, connectivity, cells,
-                                            materialPointer, request.Options, executor);
+    const stm::Status status = stmCutInput::WithCellMaterials(input,
+      [&](const auto* materials)
+      {
+        return function ? smoother.Smooth(local.data(), points, connectivity, cells, materials,
+                            request.Options, projector, executor)
+                        : smoother.Smooth(local.data(), points, connectivity, cells, materials,
+                            request.Options, executor);
+      });
     if (!status.IsOk())
     {
       return status;
@@ -360,7 +364,7 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
   {
     return stm::Status::Ok();
   }
-  return SplitEdges<Dim>(request, connectivity, local, materials, executor);
+  return SplitEdges<Dim>(request, connectivity, local, executor);
 }
 } // namespace
 

@@ -13,6 +13,7 @@
 
 #include "stmPieces.h"
 
+#include "vtkAOSDataArrayTemplate.h"
 #include "vtkAlgorithm.h"
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
@@ -105,6 +106,28 @@ inline std::vector<std::int64_t> CellMaterials(
       }
     });
   return materials;
+}
+
+/// Returns run(materials) with the cells' "Material" array as the core reads it: the array's
+/// own values when it holds one component of 32- or 64-bit integers (no copy of 8 bytes per
+/// cell), else a 64-bit copy of its first component; nullptr when there is no such array.
+template <class Run>
+auto WithCellMaterials(vtkUnstructuredGrid* input, Run&& run)
+{
+  vtkDataArray* array = input->GetCellData()->GetArray("Material");
+  if (array && array->GetNumberOfComponents() == 1 && array->GetNumberOfTuples() > 0)
+  {
+    if (auto* narrow = vtkAOSDataArrayTemplate<vtkTypeInt32>::FastDownCast(array))
+    {
+      return run(static_cast<const vtkTypeInt32*>(narrow->GetPointer(0)));
+    }
+    if (auto* wide = vtkAOSDataArrayTemplate<vtkTypeInt64>::FastDownCast(array))
+    {
+      return run(static_cast<const vtkTypeInt64*>(wide->GetPointer(0)));
+    }
+  }
+  const std::vector<std::int64_t> copy = CellMaterials(input);
+  return run(copy.empty() ? static_cast<const std::int64_t*>(nullptr) : copy.data());
 }
 
 /// The dimension of a mesh of only tetrahedra (3) or only triangles (2); 0 otherwise, with the

@@ -219,7 +219,8 @@ struct BoundarySmoothStats
   std::int64_t JunctionLinePoints = 0;
   std::int64_t JunctionCornerPoints = 0;
   int NumberOfColours = 0;
-  /// Points whose final position differs from the original.
+  /// Points that a move changed (kept as a flag per point rather than by comparing with a copy
+  /// of every point's start, 8 * Dim bytes per point at the smoother's peak).
   std::int64_t MovedPoints = 0;
   /// Moves accepted in full, accepted at half or a quarter, and rejected (the point stayed).
   std::int64_t AcceptedMoves = 0;
@@ -289,6 +290,10 @@ public:
   static double TaubinMu(double lambda, double passBand) { return 1.0 / (passBand - 1.0 / lambda); }
 
 private:
+  /// Point ids in the neighbour rows: 32-bit (Smooth refuses 2^31 points or more), as the rows
+  /// of the interior layers are one of the larger arrays at the smoother's peak.
+  using NeighbourId = std::int32_t;
+
   /// A cell's quality as the move validation compares it: the cosine of the smallest dihedral
   /// angle rather than the angle, so that the hot loop never calls acos (the angle is monotone
   /// in the cosine, so "no smaller angle" is "no larger cosine"). A cached figure is only ever
@@ -338,8 +343,8 @@ private:
 
   /// Compressed rows from rows gathered per chunk of points: offsets holds each point's count
   /// at p + 1 and becomes the prefix sums; the chunks are joined in order and freed.
-  static void JoinRows(std::vector<std::vector<std::int64_t>>& chunks,
-    std::vector<std::int64_t>& offsets, std::vector<std::int64_t>& rows)
+  static void JoinRows(std::vector<std::vector<NeighbourId>>& chunks,
+    std::vector<std::int64_t>& offsets, std::vector<NeighbourId>& rows)
   {
     for (std::size_t p = 0; p + 1 < offsets.size(); ++p)
     {
@@ -347,10 +352,10 @@ private:
     }
     rows.clear();
     rows.reserve(static_cast<std::size_t>(offsets.back()));
-    for (std::vector<std::int64_t>& chunk : chunks)
+    for (std::vector<NeighbourId>& chunk : chunks)
     {
       rows.insert(rows.end(), chunk.begin(), chunk.end());
-      std::vector<std::int64_t>().swap(chunk);
+      std::vector<NeighbourId>().swap(chunk);
     }
   }
 
@@ -464,7 +469,8 @@ private:
   std::int64_t NumberOfPoints = 0;
   std::int64_t NumberOfCells = 0;
   // Copied from the points by the threads before the iterations (UninitializedVector).
-  UninitializedVector<double> Original;
+  UninitializedVector<double> Original; // only with MaxDisplacement: 8 * Dim bytes per point
+  std::vector<std::uint8_t> Moved;      // per point: 1 once a move changed it
   UninitializedVector<double> Targets;
   UninitializedVector<double> Composed; // Taubin's targets after the mu step
   std::vector<std::uint8_t> Roles;
@@ -474,11 +480,11 @@ private:
   using Incidences = PointCells<Dim, std::int32_t>;
   Incidences Incidence;
   std::vector<std::int64_t> SurfaceOffsets; // point -> its surface neighbours (CSR)
-  std::vector<std::int64_t> SurfaceNeighbours;
+  std::vector<NeighbourId> SurfaceNeighbours;
   // Written in full by the first measure, which touches them first (UninitializedVector).
   UninitializedVector<std::int8_t> Signs;
   std::vector<std::int64_t> EdgeOffsets; // interior-layer point -> its edge neighbours (CSR)
-  std::vector<std::int64_t> EdgeNeighbours;
+  std::vector<NeighbourId> EdgeNeighbours;
   UninitializedVector<Shape> Shapes; // per cell, together: a move reads and writes both
   UninitializedVector<double> Determinants;
   double ConditionBound = 0.0;
@@ -648,7 +654,7 @@ void BoundarySmoother<Dim>::ConstrainJunctions(const IdType* connectivity,
   std::sort(lineEdges.begin(), lineEdges.end());
   lineEdges.erase(std::unique(lineEdges.begin(), lineEdges.end()), lineEdges.end());
   std::vector<std::int64_t> offsets(this->SurfaceOffsets);
-  std::vector<std::int64_t> neighbours;
+  std::vector<NeighbourId> neighbours;
   neighbours.reserve(this->SurfaceNeighbours.size());
   std::size_t edge = 0;
   for (std::int64_t p = 0; p < this->NumberOfPoints; ++p)
@@ -661,8 +667,8 @@ void BoundarySmoother<Dim>::ConstrainJunctions(const IdType* connectivity,
     const std::size_t count = end - edge;
     if (count == 2 && this->Roles[p] == Surface)
     {
-      neighbours.push_back(lineEdges[edge].second);
-      neighbours.push_back(lineEdges[edge + 1].second);
+      neighbours.push_back(static_cast<NeighbourId>(lineEdges[edge].second));
+      neighbours.push_back(static_cast<NeighbourId>(lineEdges[edge + 1].second));
       ++this->Stats.JunctionLinePoints;
     }
     else
@@ -694,6 +700,11 @@ Status BoundarySmoother<Dim>::Validate(double* points, std::int64_t numberOfPoin
   {
     return Status::Invalid(
       "the smoother takes at most 2^31 - 1 cells, the mesh has " + std::to_string(numberOfCells));
+  }
+  if (numberOfPoints > std::numeric_limits<NeighbourId>::max())
+  {
+    return Status::Invalid(
+      "the smoother takes at most 2^31 - 1 points, the mesh has " + std::to_string(numberOfPoints));
   }
   if (options.NumberOfIterations < 0)
   {
@@ -1157,7 +1168,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   {
     constexpr std::int64_t RoleChunk = 4096;
     const std::int64_t roleChunks = (numberOfPoints + RoleChunk - 1) / RoleChunk;
-    std::vector<std::vector<std::int64_t>> chunkNeighbours(static_cast<std::size_t>(roleChunks));
+    std::vector<std::vector<NeighbourId>> chunkNeighbours(static_cast<std::size_t>(roleChunks));
     struct RoleKernel
     {
       struct Scratch
@@ -1169,13 +1180,13 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
       const std::uint8_t* SurfaceMasks;
       const std::uint8_t* FixedMasks;
       const std::uint8_t* OuterMasks;
-      std::vector<std::int64_t>* Chunks;
+      std::vector<NeighbourId>* Chunks;
       void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
       {
         BoundarySmoother& self = *this->Self;
         for (std::int64_t chunk = begin; chunk < end; ++chunk)
         {
-          std::vector<std::int64_t>& out = this->Chunks[chunk];
+          std::vector<NeighbourId>& out = this->Chunks[chunk];
           const std::int64_t last = std::min(self.NumberOfPoints, (chunk + 1) * RoleChunk);
           for (std::int64_t p = chunk * RoleChunk; p < last; ++p)
           {
@@ -1322,7 +1333,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   // with a per-thread stamp per point before the sort, so only the unique ones are sorted.
   constexpr std::int64_t EdgeChunk = 4096;
   const std::int64_t edgeChunks = (numberOfPoints + EdgeChunk - 1) / EdgeChunk;
-  std::vector<std::vector<std::int64_t>> chunkNeighbours(static_cast<std::size_t>(edgeChunks));
+  std::vector<std::vector<NeighbourId>> chunkNeighbours(static_cast<std::size_t>(edgeChunks));
   this->EdgeOffsets.assign(static_cast<std::size_t>(numberOfPoints) + 1, 0);
   struct EdgeKernel
   {
@@ -1333,7 +1344,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     };
     BoundarySmoother* Self;
     const IdType* Connectivity;
-    std::vector<std::int64_t>* Chunks;
+    std::vector<NeighbourId>* Chunks;
     std::uint8_t* Tips; // per point: 1 for an interior-layer point with one interior neighbour
     void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
     {
@@ -1341,7 +1352,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
       scratch.Stamps.resize(static_cast<std::size_t>(self.NumberOfPoints), -1);
       for (std::int64_t chunk = begin; chunk < end; ++chunk)
       {
-        std::vector<std::int64_t>& out = this->Chunks[chunk];
+        std::vector<NeighbourId>& out = this->Chunks[chunk];
         const std::int64_t last = std::min(self.NumberOfPoints, (chunk + 1) * EdgeChunk);
         for (std::int64_t p = chunk * EdgeChunk; p < last; ++p)
         {
@@ -1420,7 +1431,10 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   executor.ReportProgress(0.1);
 
   // The iterations.
-  this->Original.resize(static_cast<std::size_t>(numberOfPoints * Dim));
+  this->Original.resize(options.MaxDisplacement > 0.0
+      ? static_cast<std::size_t>(numberOfPoints * Dim)
+      : std::size_t{ 0 });
+  this->Moved.assign(static_cast<std::size_t>(numberOfPoints), 0);
   this->Targets.resize(static_cast<std::size_t>(numberOfPoints * Dim));
   this->Composed.resize(
     options.Method == SmoothingMethod::Taubin ? this->Targets.size() : std::size_t{ 0 });
@@ -1431,8 +1445,11 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
     {
       BoundarySmoother& self = *this->Self;
-      std::copy(
-        self.Points + begin * Dim, self.Points + end * Dim, self.Original.data() + begin * Dim);
+      if (!self.Original.empty())
+      {
+        std::copy(
+          self.Points + begin * Dim, self.Points + end * Dim, self.Original.data() + begin * Dim);
+      }
       std::copy(
         self.Points + begin * Dim, self.Points + end * Dim, self.Targets.data() + begin * Dim);
       if (!self.Composed.empty())
@@ -1492,23 +1509,16 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     return Status::Aborted();
   }
   summarize(this->Stats.WorstConditionAfter, this->Stats.MinDihedralAfter, this->Stats.VolumeAfter);
-  for (std::int64_t p = 0; p < numberOfPoints; ++p)
-  {
-    bool moved = false;
-    for (int c = 0; c < Dim; ++c)
-    {
-      moved = moved || points[p * Dim + c] != this->Original[p * Dim + c];
-    }
-    this->Stats.MovedPoints += moved;
-  }
+  this->Stats.MovedPoints = std::count(this->Moved.begin(), this->Moved.end(), std::uint8_t{ 1 });
   this->Stats.AcceptedMoves = this->Accepted;
   this->Stats.ReducedMoves = this->Reduced;
   this->Stats.RejectedMoves = this->Rejected;
   UninitializedVector<double>().swap(this->Targets);
   UninitializedVector<double>().swap(this->Composed);
   UninitializedVector<double>().swap(this->Original);
+  std::vector<std::uint8_t>().swap(this->Moved);
   std::vector<std::int64_t>().swap(this->EdgeOffsets);
-  std::vector<std::int64_t>().swap(this->EdgeNeighbours);
+  std::vector<NeighbourId>().swap(this->EdgeNeighbours);
   executor.ReportProgress(1.0);
   return Status::Ok();
 }
@@ -1616,7 +1626,7 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
       for (std::int64_t i = begin; i < end; ++i)
       {
         const std::int64_t p = (*this->Points)[i];
-        const std::int64_t* neighbours = nullptr;
+        const NeighbourId* neighbours = nullptr;
         std::int64_t count = 0;
         if (this->Surface)
         {
@@ -1785,6 +1795,7 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
         }
         for (int c = 0; c < Dim; ++c)
         {
+          self.Moved[p] |= x[c] != tentative[c];
           x[c] = tentative[c];
         }
         for (std::int64_t k = first; k < last; ++k)
@@ -2206,7 +2217,7 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
               for (int c = 0; c < Dim; ++c)
               {
                 squared += (y[c] - start[c]) * (y[c] - start[c]);
-                const double o = y[c] - self.Original[p * Dim + c];
+                const double o = self.Original.empty() ? 0.0 : y[c] - self.Original[p * Dim + c];
                 fromOriginal += o * o;
               }
               if (squared > reach * reach ||
@@ -2227,6 +2238,7 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
           if (bestBadness < current)
           {
             current = bestBadness;
+            self.Moved[p] |= !std::equal(bestPosition, bestPosition + Dim, x);
             std::copy(bestPosition, bestPosition + Dim, x);
             for (std::int64_t k = first; k < last; ++k)
             {

@@ -522,11 +522,26 @@ Status MinorityCornerVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
     return valid;
   }
   corner.assign(static_cast<std::size_t>(voxelCount), 0);
+  // Offsets of the rows beside a row (along the other axes): a voxel inside the image whose
+  // neighbours along every axis have its value needs no count, and whole rows answer that in a
+  // loop the compiler vectorizes (AAL upsampled 2.5 times, 111 million voxels: most of the
+  // spacetree stage's 9 s with a lookup per neighbour).
+  std::vector<std::int64_t> besideRows;
+  {
+    std::int64_t stride = image.Dimensions[0];
+    for (int axis = 1; axis < Dim; ++axis)
+    {
+      besideRows.push_back(stride);
+      besideRows.push_back(-stride);
+      stride *= image.Dimensions[axis];
+    }
+  }
   struct CornerKernel
   {
     using Scratch = NoScratch;
     const MaterialImage<Dim>* Image;
     bool BodyOnly;
+    const std::vector<std::int64_t>* BesideRows;
     std::uint8_t* Corner;
 
     std::int32_t MaterialAt(const LatticeIndex<Dim>& voxel) const
@@ -534,51 +549,99 @@ Status MinorityCornerVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
       return detail::MaterialOrBodyAt<Dim>(*this->Image, this->BodyOnly, voxel);
     }
 
-    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    /// Whether every voxel of the row has all its neighbours along the other axes.
+    bool RowWithin(std::int64_t row) const
     {
-      constexpr int Around = 1 << Dim;
-      for (std::int64_t linear = begin; linear < end; ++linear)
+      bool within = true;
+      for (int axis = 1; axis < Dim; ++axis)
       {
-        const LatticeIndex<Dim> voxel = detail::UnlinearIndex<Dim>(linear, this->Image->Dimensions);
-        const std::int32_t own = this->MaterialAt(voxel);
-        // With every face neighbour of its material, m holds the voxel and its d neighbours
-        // towards each corner: 1 + d of 2^d, never less than half. Most voxels end here.
-        bool uniform = true;
-        for (int axis = 0; axis < Dim && uniform; ++axis)
+        const std::int64_t index = row % this->Image->Dimensions[axis];
+        row /= this->Image->Dimensions[axis];
+        within = within && index >= 1 && index <= this->Image->Dimensions[axis] - 2;
+      }
+      return within;
+    }
+
+    void operator()(Scratch&, std::int64_t beginRow, std::int64_t endRow) const
+    {
+      const std::int64_t length = this->Image->Dimensions[0];
+      std::vector<std::uint8_t> same;
+      for (std::int64_t row = beginRow; row < endRow; ++row)
+      {
+        const std::int64_t start = row * length;
+        if (length < 3 || !this->RowWithin(row))
         {
-          for (int step = -1; step <= 1 && uniform; step += 2)
+          for (std::int64_t i = 0; i < length; ++i)
           {
-            LatticeIndex<Dim> neighbour = voxel;
-            neighbour[axis] += step;
-            uniform = neighbour[axis] >= 0 && neighbour[axis] < this->Image->Dimensions[axis] &&
-              this->MaterialAt(neighbour) == own;
+            this->Check(start + i);
           }
-        }
-        if (uniform)
-        {
           continue;
         }
-        for (int c = 0; c < Around && !this->Corner[linear]; ++c)
+        const MaterialIndex* values = this->Image->Values + start;
+        same.assign(static_cast<std::size_t>(length), 1);
+        for (const std::int64_t offset : *this->BesideRows)
         {
-          // Corner c of the voxel is at voxel + bits of c; the voxels around it are
-          // corner - 1 + bits of k.
-          int same = 0;
-          for (int k = 0; k < Around; ++k)
+          const MaterialIndex* other = values + offset;
+          for (std::int64_t i = 0; i < length; ++i)
           {
-            LatticeIndex<Dim> around;
-            for (int axis = 0; axis < Dim; ++axis)
-            {
-              around[axis] = voxel[axis] + ((c >> axis) & 1) - 1 + ((k >> axis) & 1);
-            }
-            same += this->MaterialAt(around) == own ? 1 : 0;
+            same[i] &= other[i] == values[i] ? 1 : 0;
           }
-          this->Corner[linear] = 2 * same < Around ? 1 : 0;
         }
+        this->Check(start);
+        for (std::int64_t i = 1; i < length - 1; ++i)
+        {
+          if (!(same[i] && values[i - 1] == values[i] && values[i + 1] == values[i]))
+          {
+            this->Check(start + i);
+          }
+        }
+        this->Check(start + length - 1);
+      }
+    }
+
+    void Check(std::int64_t linear) const
+    {
+      constexpr int Around = 1 << Dim;
+      const LatticeIndex<Dim> voxel = detail::UnlinearIndex<Dim>(linear, this->Image->Dimensions);
+      const std::int32_t own = this->MaterialAt(voxel);
+      // With every face neighbour of its material, m holds the voxel and its d neighbours
+      // towards each corner: 1 + d of 2^d, never less than half. Most voxels end here.
+      bool uniform = true;
+      for (int axis = 0; axis < Dim && uniform; ++axis)
+      {
+        for (int step = -1; step <= 1 && uniform; step += 2)
+        {
+          LatticeIndex<Dim> neighbour = voxel;
+          neighbour[axis] += step;
+          uniform = neighbour[axis] >= 0 && neighbour[axis] < this->Image->Dimensions[axis] &&
+            this->MaterialAt(neighbour) == own;
+        }
+      }
+      if (uniform)
+      {
+        return;
+      }
+      for (int c = 0; c < Around && !this->Corner[linear]; ++c)
+      {
+        // Corner c of the voxel is at voxel + bits of c; the voxels around it are
+        // corner - 1 + bits of k.
+        int same = 0;
+        for (int k = 0; k < Around; ++k)
+        {
+          LatticeIndex<Dim> around;
+          for (int axis = 0; axis < Dim; ++axis)
+          {
+            around[axis] = voxel[axis] + ((c >> axis) & 1) - 1 + ((k >> axis) & 1);
+          }
+          same += this->MaterialAt(around) == own ? 1 : 0;
+        }
+        this->Corner[linear] = 2 * same < Around ? 1 : 0;
       }
     }
   };
-  CornerKernel kernel{ &image, bodyOnly, corner.data() };
-  executor.For(0, voxelCount, 1 << 14, kernel);
+  CornerKernel kernel{ &image, bodyOnly, &besideRows, corner.data() };
+  const std::int64_t length = image.Dimensions[0];
+  executor.For(0, voxelCount / length, std::max<std::int64_t>(1, (1 << 14) / length), kernel);
   return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
 }
 
