@@ -472,7 +472,9 @@ private:
   UninitializedVector<double> Original; // only with MaxDisplacement: 8 * Dim bytes per point
   std::vector<std::uint8_t> Moved;      // per point: 1 once a move changed it
   UninitializedVector<double> Targets;
-  UninitializedVector<double> Composed; // Taubin's targets after the mu step
+  // Taubin's targets after the mu step, by the point's position in its step (surface points
+  // only, not every point: 8 * Dim bytes per point at the smoother's peak).
+  UninitializedVector<double> Composed;
   std::vector<std::uint8_t> Roles;
   std::vector<std::uint8_t> OnOuterBoundary; // per point: a corner of a facet with no neighbour
   // 32-bit rows: a move reads its point's row three times, and the rows are the smoother's
@@ -1436,8 +1438,6 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
       : std::size_t{ 0 });
   this->Moved.assign(static_cast<std::size_t>(numberOfPoints), 0);
   this->Targets.resize(static_cast<std::size_t>(numberOfPoints * Dim));
-  this->Composed.resize(
-    options.Method == SmoothingMethod::Taubin ? this->Targets.size() : std::size_t{ 0 });
   struct CopyKernel
   {
     using Scratch = NoScratch;
@@ -1452,10 +1452,6 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
       }
       std::copy(
         self.Points + begin * Dim, self.Points + end * Dim, self.Targets.data() + begin * Dim);
-      if (!self.Composed.empty())
-      {
-        std::fill(self.Composed.data() + begin * Dim, self.Composed.data() + end * Dim, 0.0);
-      }
     }
   };
   CopyKernel copies{ this };
@@ -1620,6 +1616,7 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
     double Factor;
     const double* Source;
     double* Destination;
+    bool ByPosition; // Destination by the point's position in Points, else by its id
     void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
     {
       const double* x = this->Source;
@@ -1638,7 +1635,7 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
           neighbours = this->Self->EdgeNeighbours.data() + this->Self->EdgeOffsets[p];
           count = this->Self->EdgeOffsets[p + 1] - this->Self->EdgeOffsets[p];
         }
-        double* target = this->Destination + p * Dim;
+        double* target = this->Destination + (this->ByPosition ? i : p) * Dim;
         if (count == 0)
         {
           for (int c = 0; c < Dim; ++c)
@@ -1670,6 +1667,7 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
     Projector* Project;
     bool UseProjector;
     const double* Targets;
+    bool TargetsByPosition; // Targets by the point's position in the blocks, else by its id
     Executor* Exec;
     // The outcomes of Move besides the accepted attempt (0: in full, 1: half, 2: a quarter).
     enum : int
@@ -1697,12 +1695,11 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
     }
 
     // Moves point p toward its target, validated: in full, else half, else a quarter of it.
-    int Move(Scratch& scratch, std::int64_t p) const
+    int Move(Scratch& scratch, std::int64_t p, const double* target) const
     {
       BoundarySmoother& self = *this->Self;
       const BoundarySmoothOptions& options = self.Options;
       double* x = self.Points + p * Dim;
-      const double* target = this->Targets + p * Dim;
       if (std::equal(x, x + Dim, target))
       {
         return AtTarget;
@@ -1825,7 +1822,9 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
           {
             this->Prefetch(blocks.Points[i + 1]);
           }
-          const int outcome = this->Move(scratch, blocks.Points[i]);
+          const std::int64_t p = blocks.Points[i];
+          const int outcome =
+            this->Move(scratch, p, this->Targets + (this->TargetsByPosition ? i : p) * Dim);
           accepted += outcome == 0;
           reduced += outcome == 1 || outcome == 2;
           rejected += outcome == Rejected;
@@ -1843,16 +1842,18 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
   // reset below), so the mu pass reads the lambda targets of neighbours in the step and the
   // positions of the others.
   TargetKernel targets{ this, &all, connectivity, surface, lambda, this->Points,
-    this->Targets.data() };
+    this->Targets.data(), false };
   if (!given)
   {
     executor.For(0, static_cast<std::int64_t>(all.size()), 1024, targets);
   }
   const double* finalTargets = this->Targets.data();
-  if (mu != 0.0 && !given)
+  const bool composedTargets = mu != 0.0 && !given;
+  if (composedTargets)
   {
+    this->Composed.resize(all.size() * Dim); // once: the surface steps have the same points
     TargetKernel composed{ this, &all, connectivity, surface, mu, this->Targets.data(),
-      this->Composed.data() };
+      this->Composed.data(), true };
     executor.For(0, static_cast<std::int64_t>(all.size()), 1024, composed);
     finalTargets = this->Composed.data();
   }
@@ -1863,7 +1864,7 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
       return Status::Aborted();
     }
     MoveKernel move{ this, &blocks, &colour, connectivity, &projector, project && surface,
-      finalTargets, &executor };
+      finalTargets, composedTargets, &executor };
     executor.For(0, static_cast<std::int64_t>(colour.size()), 1, move);
   }
   // Back to "the target of a point outside a step is its position" for the next step.
