@@ -15,7 +15,6 @@
 #ifndef stmPieces_h
 #define stmPieces_h
 
-#include "vtkDataObject.h"
 #include "vtkDataSet.h"
 #include "vtkInformation.h"
 #include "vtkStreamingDemandDrivenPipeline.h"

@@ -192,17 +192,20 @@ bool BeginRequest(vtkAlgorithm* filter, vtkInformationVector* inputPort,
     requestResult = 1;
     return false;
   }
-  if (stmPieces::IsLaterPiece(info, input, error) && error.empty())
+  if (stmPieces::IsLaterPiece(info, input, error))
   {
-    output->Initialize(); // piece 0 has the whole spacetree
-    requestResult = 1;
-    return false;
+    if (error.empty())
+    {
+      output->Initialize(); // piece 0 has the whole spacetree
+      requestResult = 1;
+      return false;
+    }
   }
-  if (!input && error.empty())
+  else if (!input)
   {
     error = "the input must be the vtkUnstructuredGrid output of ImageToSpacetree";
   }
-  if (input && error.empty() && ReadGeometry(input->GetFieldData(), geometry, error))
+  else if (ReadGeometry(input->GetFieldData(), geometry, error))
   {
     return true;
   }

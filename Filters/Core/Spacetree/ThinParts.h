@@ -88,6 +88,41 @@ LatticeIndex<Dim> UnlinearIndex(std::int64_t linear, const LatticeIndex<Dim>& di
   }
   return index;
 }
+
+/// same[i] = 1 where the voxel start + i has the value of the voxel start + i + offset for every
+/// offset (rows of `length` voxels; a loop the compiler vectorizes).
+template <int Dim>
+void SameAcrossRows(const MaterialImage<Dim>& image, std::int64_t start, std::int64_t length,
+  const std::vector<std::int64_t>& offsets, std::vector<std::uint8_t>& same)
+{
+  same.assign(static_cast<std::size_t>(length), 1);
+  const MaterialIndex* row = image.Values + start;
+  for (const std::int64_t offset : offsets)
+  {
+    const MaterialIndex* other = row + offset;
+    for (std::int64_t i = 0; i < length; ++i)
+    {
+      same[i] &= other[i] == row[i] ? 1 : 0;
+    }
+  }
+}
+
+/// Whether the row of `linear` (in a lattice of dims) has every index but axis 0's in
+/// [1, dims - 2]: for voxels, all voxels around them exist; for corners (dims one more than the
+/// image's), all voxels at them.
+template <int Dim>
+bool RowWithin(std::int64_t linear, const LatticeIndex<Dim>& dims)
+{
+  linear /= dims[0];
+  bool within = true;
+  for (int axis = 1; axis < Dim; ++axis)
+  {
+    const std::int64_t index = linear % dims[axis];
+    linear /= dims[axis];
+    within = within && index >= 1 && index <= dims[axis] - 2;
+  }
+  return within;
+}
 } // namespace detail
 
 /// thin: one flag per voxel (axis 0 fastest), 1 for a thin voxel.
@@ -164,37 +199,11 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
     const MaterialIndex material = image.Values[linear];
     return bodyOnly ? (material == BackgroundMaterial ? 0 : 1) : material;
   };
-  // same[i] = 1 where the voxel start + i has the value of the voxel start + i + offset for every
-  // offset (rows of `length` voxels; a loop the compiler vectorizes).
   auto sameAcrossRows = [&image](std::int64_t start, std::int64_t length,
                           const std::vector<std::int64_t>& offsets, std::vector<std::uint8_t>& same)
-  {
-    same.assign(static_cast<std::size_t>(length), 1);
-    const MaterialIndex* row = image.Values + start;
-    for (const std::int64_t offset : offsets)
-    {
-      const MaterialIndex* other = row + offset;
-      for (std::int64_t i = 0; i < length; ++i)
-      {
-        same[i] &= other[i] == row[i] ? 1 : 0;
-      }
-    }
-  };
-  // Whether the row of `linear` (in a lattice of dims) has every index but axis 0's in
-  // [1, dims - 2]: for voxels, all voxels around them exist; for corners (dims one more than the
-  // image's), all voxels at them.
+  { detail::SameAcrossRows<Dim>(image, start, length, offsets, same); };
   auto rowWithin = [](std::int64_t linear, const LatticeIndex<Dim>& dims)
-  {
-    linear /= dims[0];
-    bool within = true;
-    for (int axis = 1; axis < Dim; ++axis)
-    {
-      const std::int64_t index = linear % dims[axis];
-      linear /= dims[axis];
-      within = within && index >= 1 && index <= dims[axis] - 2;
-    }
-    return within;
-  };
+  { return detail::RowWithin<Dim>(linear, dims); };
   const std::int64_t rowLength = image.Dimensions[0];
   const std::int64_t rowGrain = std::max<std::int64_t>(1, (1 << 14) / rowLength);
 
@@ -549,19 +558,6 @@ Status MinorityCornerVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
       return detail::MaterialOrBodyAt<Dim>(*this->Image, this->BodyOnly, voxel);
     }
 
-    /// Whether every voxel of the row has all its neighbours along the other axes.
-    bool RowWithin(std::int64_t row) const
-    {
-      bool within = true;
-      for (int axis = 1; axis < Dim; ++axis)
-      {
-        const std::int64_t index = row % this->Image->Dimensions[axis];
-        row /= this->Image->Dimensions[axis];
-        within = within && index >= 1 && index <= this->Image->Dimensions[axis] - 2;
-      }
-      return within;
-    }
-
     void operator()(Scratch&, std::int64_t beginRow, std::int64_t endRow) const
     {
       const std::int64_t length = this->Image->Dimensions[0];
@@ -569,7 +565,7 @@ Status MinorityCornerVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
       for (std::int64_t row = beginRow; row < endRow; ++row)
       {
         const std::int64_t start = row * length;
-        if (length < 3 || !this->RowWithin(row))
+        if (length < 3 || !detail::RowWithin<Dim>(start, this->Image->Dimensions))
         {
           for (std::int64_t i = 0; i < length; ++i)
           {
@@ -577,16 +573,8 @@ Status MinorityCornerVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
           }
           continue;
         }
+        detail::SameAcrossRows<Dim>(*this->Image, start, length, *this->BesideRows, same);
         const MaterialIndex* values = this->Image->Values + start;
-        same.assign(static_cast<std::size_t>(length), 1);
-        for (const std::int64_t offset : *this->BesideRows)
-        {
-          const MaterialIndex* other = values + offset;
-          for (std::int64_t i = 0; i < length; ++i)
-          {
-            same[i] &= other[i] == values[i] ? 1 : 0;
-          }
-        }
         this->Check(start);
         for (std::int64_t i = 1; i < length - 1; ++i)
         {
