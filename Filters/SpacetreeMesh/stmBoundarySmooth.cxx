@@ -128,7 +128,8 @@ vtkSmartPointer<vtkAbstractArray> ExtendedCopy(vtkAbstractArray* source, vtkIdTy
 
 /// The output with the edits of InteriorEdgeSplit: new points appended (point data at the
 /// edge's midpoint, zero displacement), cells changed in place and appended (cell data of the
-/// cell each was split from).
+/// cell each was split from). An edge may end at a point an earlier split added, so the ends are
+/// read from the extended arrays, which hold every new point before the next one.
 template <int Dim, class IdType>
 stm::Status SplitEdges(SmoothRequest& request, const IdType* connectivity,
   const std::vector<double>& local, stmSMPExecutor& executor)
@@ -173,7 +174,7 @@ stm::Status SplitEdges(SmoothRequest& request, const IdType* connectivity,
       const auto& point = split.GetNewPoints()[static_cast<std::size_t>(n)];
       ends->SetId(0, point.A);
       ends->SetId(1, point.B);
-      copy->InterpolateTuple(points + n, ends, source, halves);
+      copy->InterpolateTuple(points + n, ends, copy, halves);
     }
     pointData->AddArray(copy);
   }
@@ -188,8 +189,8 @@ stm::Status SplitEdges(SmoothRequest& request, const IdType* connectivity,
   {
     const auto& point = split.GetNewPoints()[static_cast<std::size_t>(n)];
     double a[3], b[3], base[3], x[3];
-    smoothed->GetPoint(point.A, a);
-    smoothed->GetPoint(point.B, b);
+    allPoints->GetPoint(point.A, a);
+    allPoints->GetPoint(point.B, b);
     for (int c = 0; c < 3; ++c)
     {
       base[c] = 0.5 * (a[c] + b[c]);

@@ -56,7 +56,8 @@ public:
   static_assert(Dim >= 2 && Dim <= 4, "edge splitting supports dimensions 2 to 4");
   using CellIds = std::array<std::int64_t, Dim + 1>;
 
-  /// A split edge: its ends, and the new point's place (Dim coordinates).
+  /// A split edge: its ends, and the new point's place (Dim coordinates). An end may be a point
+  /// an earlier split added (an id from the number of input points on, earlier in the list).
   struct NewPoint
   {
     std::int64_t A;
