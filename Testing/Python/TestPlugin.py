@@ -313,8 +313,9 @@ radii = np.linalg.norm(smoothed_points - np.array([90.0, 108.0, 90.0]), axis=1)
 T.check(float(radii.max()) <= 40 + 1e-6, "a smoothed point leaves the sphere: %r" % radii.max())
 # Each added point m splits an edge (a, b) and takes the mean of their point data. An end may be a
 # point an earlier split added: its data was read from beyond the input's arrays (garbage such
-# as 2e-310 for 49 of the 1,164 points here). a and b are neighbours of m, or, when a later
-# split cut the edge between m and one of them, neighbours of that later point.
+# as 2e-310 for 20 to 49 of the 1,164 points here, from run to run). a and b are neighbours of
+# m, or, when a later split cut the edge between m and one of them, neighbours of that later
+# point.
 separating = vtk_to_numpy(smoothed.GetPointData().GetArray("SeparatingFunction"))
 first_added = inside_data.GetNumberOfPoints()
 split_cells = T.connectivity(smoothed, 4)

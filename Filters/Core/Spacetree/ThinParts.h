@@ -199,11 +199,6 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
     const MaterialIndex material = image.Values[linear];
     return bodyOnly ? (material == BackgroundMaterial ? 0 : 1) : material;
   };
-  auto sameAcrossRows = [&image](std::int64_t start, std::int64_t length,
-                          const std::vector<std::int64_t>& offsets, std::vector<std::uint8_t>& same)
-  { detail::SameAcrossRows<Dim>(image, start, length, offsets, same); };
-  auto rowWithin = [](std::int64_t linear, const LatticeIndex<Dim>& dims)
-  { return detail::RowWithin<Dim>(linear, dims); };
   const std::int64_t rowLength = image.Dimensions[0];
   const std::int64_t rowGrain = std::max<std::int64_t>(1, (1 << 14) / rowLength);
 
@@ -215,8 +210,6 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
     const decltype(materialAt)* MaterialAt;
     const decltype(unlinear)* Unlinear;
     const decltype(materialOf)* MaterialOf;
-    const decltype(sameAcrossRows)* SameAcrossRows;
-    const decltype(rowWithin)* RowWithin;
     const std::vector<std::int64_t>* CornerRows;
     const MaterialImage<Dim>* Image;
     const LatticeIndex<Dim>* Corners;
@@ -229,7 +222,7 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
       for (std::int64_t row = beginRow; row < endRow; ++row)
       {
         const LatticeIndex<Dim> first = (*this->Unlinear)(row * length, *this->Corners);
-        if (!(*this->RowWithin)(row * length, *this->Corners) || length < 3)
+        if (!detail::RowWithin<Dim>(row * length, *this->Corners) || length < 3)
         {
           for (std::int64_t i = 0; i < length; ++i)
           {
@@ -244,7 +237,7 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
           lowest = lowest * image.Dimensions[axis] + first[axis] - 1;
         }
         lowest *= image.Dimensions[0];
-        (*this->SameAcrossRows)(lowest, length - 1, *this->CornerRows, same);
+        detail::SameAcrossRows<Dim>(image, lowest, length - 1, *this->CornerRows, same);
         const MaterialIndex* values = image.Values + lowest;
         this->Count(row * length, first, 0);
         for (std::int64_t i = 1; i < length - 1; ++i)
@@ -299,8 +292,8 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
       }
     }
   };
-  MajorityKernel majorityKernel{ &materialAt, &unlinear, &materialOf, &sameAcrossRows, &rowWithin,
-    &cornerRows, &image, &corners, majority.data() };
+  MajorityKernel majorityKernel{ &materialAt, &unlinear, &materialOf, &cornerRows, &image, &corners,
+    majority.data() };
   executor.For(0, cornerCount / corners[0], rowGrain, majorityKernel);
   if (executor.ShouldAbort())
   {
@@ -317,8 +310,6 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
     const decltype(materialAt)* MaterialAt;
     const decltype(materialOf)* MaterialOf;
     const decltype(unlinear)* Unlinear;
-    const decltype(sameAcrossRows)* SameAcrossRows;
-    const decltype(rowWithin)* RowWithin;
     const std::vector<std::int64_t>* CentreRows;
     const std::array<std::int64_t, Neighbours>* AroundVoxel;
     const std::array<int, Neighbours>* Weights;
@@ -331,7 +322,7 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
       for (std::int64_t row = beginRow; row < endRow; ++row)
       {
         const std::int64_t start = row * length;
-        if (!(*this->RowWithin)(start, this->Image->Dimensions) || length < 3)
+        if (!detail::RowWithin<Dim>(start, this->Image->Dimensions) || length < 3)
         {
           for (std::int64_t i = 0; i < length; ++i)
           {
@@ -340,7 +331,7 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
           continue;
         }
         // One material all around: its share is 1.
-        (*this->SameAcrossRows)(start, length, *this->CentreRows, same);
+        detail::SameAcrossRows<Dim>(*this->Image, start, length, *this->CentreRows, same);
         const MaterialIndex* values = this->Image->Values + start;
         this->Kept[start] = this->Count(start, false);
         for (std::int64_t i = 1; i < length - 1; ++i)
@@ -385,8 +376,8 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
       return 2 * ownSum > total ? 1 : 0;
     }
   };
-  CentreKernel centreKernel{ &materialAt, &materialOf, &unlinear, &sameAcrossRows, &rowWithin,
-    &centreRows, &aroundVoxel, &centreWeights, &image, centreKept.data() };
+  CentreKernel centreKernel{ &materialAt, &materialOf, &unlinear, &centreRows, &aroundVoxel,
+    &centreWeights, &image, centreKept.data() };
   executor.For(0, voxelCount / rowLength, rowGrain, centreKernel);
   if (executor.ShouldAbort())
   {
