@@ -39,7 +39,6 @@
 #include "stmVertexSnap.h"
 #include "stmeshErrors.h"
 #include "stmeshImageInput.h"
-#include "stmeshMallocTunables.h"
 #include "stmeshText.h"
 
 #include "vtkAlgorithm.h"
@@ -351,11 +350,6 @@ Arguments:
                         after the smoothing, on the smoothed mesh.
   --threads N           number of threads, 1 to 4096. Default: all cores, or VTK_SMP_MAX_THREADS.
                         The STDThread backend is used unless VTK_SMP_BACKEND_IN_USE is set.
-                        Unless GLIBC_TUNABLES is set (set it empty for glibc's defaults),
-                        stmesh starts itself again with it set to
-                        glibc.malloc.hugetlb=1:glibc.malloc.mmap_threshold=33554432:
-                        glibc.malloc.top_pad=67108864 (transparent huge pages; about 100 times
-                        fewer page faults, the 116-label atlas about a quarter faster).
   --summary FILE.json   also write the per-stage figures (seconds, peak memory and minor page
                         faults; for tessellate also the inserted points, the cells per type,
                         the boundary layers and, for hybrid and leaves output, the volume
@@ -3281,7 +3275,10 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
        << "},\n";
   json << "  \"threads\": " << summary.Threads.Threads << ",\n";
   json << "  \"smp_backend\": " << JsonString(summary.Threads.Backend) << ",\n";
-  json << "  \"malloc_tunables\": " << JsonString(stmesh::MallocTunablesInEffect()) << ",\n";
+  // Recorded because the allocator's settings change the run time by a third on virtual
+  // machines (docs/performance.md, "Page faults on this virtual machine").
+  const char* mallocTunables = std::getenv("GLIBC_TUNABLES");
+  json << "  \"malloc_tunables\": " << JsonString(mallocTunables ? mallocTunables : "") << ",\n";
   // The spacetree's levels: cell edges in voxels per level, root first, along the image axes the
   // spacetree spans; fractional below the voxel (voxel_subdivision lattice units per voxel).
   const LevelTable& levels = summary.Levels;
@@ -5056,7 +5053,6 @@ void PrintErrorLines(const std::string& message)
 
 int main(int argc, char* argv[])
 {
-  stmesh::RestartWithMallocTunables(argv);
   try
   {
     stmesh::InstallErrorCapture();
