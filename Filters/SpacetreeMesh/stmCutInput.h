@@ -85,6 +85,29 @@ vtkSmartPointer<vtkCellArray> FixedSizeCells(const std::vector<SourceId>& ids, i
   return cellArray;
 }
 
+/// A cell array of cells with `corners` points each whose connectivity is `connectivity`
+/// itself, not a copy (a vtkTypeInt32Array or vtkTypeInt64Array): only the offsets are made.
+template <class Storage>
+vtkSmartPointer<vtkCellArray> FixedSizeCellsSharing(Storage* connectivity, int corners)
+{
+  using Value = typename Storage::ValueType;
+  const vtkIdType cells = connectivity->GetNumberOfValues() / corners;
+  vtkNew<Storage> offsets;
+  offsets->SetNumberOfValues(cells + 1);
+  Value* offsetValues = offsets->GetPointer(0);
+  vtkSMPTools::For(0, cells + 1,
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      for (vtkIdType c = begin; c < end; ++c)
+      {
+        offsetValues[c] = static_cast<Value>(c * corners);
+      }
+    });
+  vtkNew<vtkCellArray> cellArray;
+  cellArray->SetData(offsets, connectivity);
+  return cellArray;
+}
+
 /// The cell array `name` ("Material" by default) as 64-bit integers (in parallel); empty
 /// without it.
 inline std::vector<std::int64_t> CellMaterials(

@@ -33,6 +33,7 @@
 #include <limits>
 #include <numeric>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 vtkStandardNewMacro(stmMarchingSimplices);
@@ -171,50 +172,62 @@ stm::Status CutVolume(CutRequest& request, stm::MarchingSimplices<Dim>& cutter,
   const auto cutPoints = static_cast<vtkIdType>(cutter.GetCutEdges().size());
   std::vector<std::int64_t> parents(static_cast<std::size_t>(cells));
   std::vector<std::uint8_t> sides(static_cast<std::size_t>(cells));
-  auto write = [&](auto* ids)
-  { return cutter.WriteCells(connectivity, ids, parents.data(), sides.data(), executor); };
   const bool fits32 = (inputPoints + cutPoints) < std::numeric_limits<std::int32_t>::max() &&
     cells * (Dim + 1) < std::numeric_limits<std::int32_t>::max();
-  std::vector<std::int32_t> ids32;
-  std::vector<std::int64_t> ids64;
+  const bool compact = request.Options.Keep != stm::KeptSides::Both;
+  // The cells go straight into the output's connectivity array: a copy of it was the cut's
+  // peak (AAL upsampled 2.5x: 800 MB).
+  PointSelection selection;
+  vtkSmartPointer<vtkCellArray> cellArray;
+  auto writeInto = [&](auto* storage)
+  {
+    using Value = typename std::remove_pointer_t<decltype(storage)>::ValueType;
+    const vtkIdType count = cells * (Dim + 1);
+    storage->SetNumberOfValues(count);
+    Value* ids = storage->GetPointer(0);
+    const stm::Status written =
+      cutter.WriteCells(connectivity, ids, parents.data(), sides.data(), executor);
+    if (!written.IsOk())
+    {
+      return written;
+    }
+    if (!compact)
+    {
+      selection = AllPoints(inputPoints, cutPoints);
+    }
+    else
+    {
+      selection = UsedPoints(inputPoints, cutPoints, ids, count);
+      vtkSMPTools::For(0, count,
+        [&](vtkIdType begin, vtkIdType end)
+        {
+          for (vtkIdType i = begin; i < end; ++i)
+          {
+            ids[i] = static_cast<Value>(selection.NewIds[ids[i]]);
+          }
+        });
+    }
+    cellArray = stmCutInput::FixedSizeCellsSharing(storage, Dim + 1);
+    return stm::Status::Ok();
+  };
   stm::Status status;
   if (fits32)
   {
-    ids32.resize(static_cast<std::size_t>(cells * (Dim + 1)));
-    status = write(ids32.data());
+    vtkNew<vtkTypeInt32Array> ids;
+    status = writeInto(ids.GetPointer());
   }
   else
   {
-    ids64.resize(static_cast<std::size_t>(cells * (Dim + 1)));
-    status = write(ids64.data());
+    vtkNew<vtkTypeInt64Array> ids;
+    status = writeInto(ids.GetPointer());
   }
   if (!status.IsOk())
   {
     return status;
   }
-  const bool compact = request.Options.Keep != stm::KeptSides::Both;
-  PointSelection selection = !compact ? AllPoints(inputPoints, cutPoints)
-    : fits32
-    ? UsedPoints(inputPoints, cutPoints, ids32.data(), static_cast<vtkIdType>(ids32.size()))
-    : UsedPoints(inputPoints, cutPoints, ids64.data(), static_cast<vtkIdType>(ids64.size()));
-  if (compact)
-  {
-    auto renumber = [&](auto& ids)
-    {
-      vtkSMPTools::For(0, static_cast<vtkIdType>(ids.size()),
-        [&](vtkIdType begin, vtkIdType end)
-        {
-          for (vtkIdType i = begin; i < end; ++i)
-          {
-            ids[i] = static_cast<typename std::decay_t<decltype(ids)>::value_type>(
-              selection.NewIds[ids[i]]);
-          }
-        });
-    };
-    fits32 ? renumber(ids32) : renumber(ids64);
-  }
   AssemblePoints(
     input, cutter.GetCutEdges(), selection, request.FunctionName, request.Options.IsoValue, output);
+  selection = PointSelection();
   // The output assembly takes a third of the run on the AAL brain mask: give the GUI a chance to
   // abort in the middle of it.
   request.Filter->UpdateProgress(0.9);
@@ -222,22 +235,20 @@ stm::Status CutVolume(CutRequest& request, stm::MarchingSimplices<Dim>& cutter,
   {
     return stm::Status::Aborted();
   }
-
-  vtkSmartPointer<vtkCellArray> cellArray = fits32
-    ? stmCutInput::FixedSizeCells<std::int32_t>(ids32, Dim + 1)
-    : stmCutInput::FixedSizeCells<std::int64_t>(ids64, Dim + 1);
-  std::vector<std::int32_t>().swap(ids32);
-  std::vector<std::int64_t>().swap(ids64);
   output->SetCells(Dim == 3 ? VTK_TETRA : VTK_TRIANGLE, cellArray);
+  cellArray = nullptr;
 
   // Cell data from the parents; Material becomes the side's label.
   vtkCellData* inCD = input->GetCellData();
   vtkCellData* outCD = output->GetCellData();
   outCD->CopyAllocate(inCD, cells);
-  vtkNew<vtkIdList> parentIds;
-  parentIds->SetNumberOfIds(cells);
-  std::copy(parents.begin(), parents.end(), parentIds->GetPointer(0));
-  outCD->CopyData(inCD, parentIds, vtkIdType{ 0 });
+  {
+    vtkNew<vtkIdList> parentIds;
+    parentIds->SetNumberOfIds(cells);
+    std::copy(parents.begin(), parents.end(), parentIds->GetPointer(0));
+    std::vector<std::int64_t>().swap(parents);
+    outCD->CopyData(inCD, parentIds, vtkIdType{ 0 });
+  }
   if (vtkAbstractArray* original = outCD->GetAbstractArray("Material"))
   {
     original->SetName("OriginalMaterial");
