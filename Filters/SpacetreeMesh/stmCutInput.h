@@ -54,37 +54,6 @@ auto DispatchSimplices(vtkCellArray* cells, int dimension, Run&& run)
   return dimension == 3 ? run(Three(), ids) : run(Two(), ids);
 }
 
-/// A cell array of cells with `corners` points each from their point ids (any integer type),
-/// stored with OutId ids (32- or 64-bit), filled in parallel.
-template <class OutId, class SourceId>
-vtkSmartPointer<vtkCellArray> FixedSizeCells(const std::vector<SourceId>& ids, int corners)
-{
-  using Storage =
-    typename std::conditional<sizeof(OutId) == 4, vtkTypeInt32Array, vtkTypeInt64Array>::type;
-  using Value = typename Storage::ValueType;
-  const auto cells = static_cast<vtkIdType>(ids.size()) / corners;
-  vtkNew<Storage> offsets, connectivity;
-  offsets->SetNumberOfValues(cells + 1);
-  connectivity->SetNumberOfValues(static_cast<vtkIdType>(ids.size()));
-  Value* offsetValues = offsets->GetPointer(0);
-  Value* idValues = connectivity->GetPointer(0);
-  vtkSMPTools::For(0, cells + 1,
-    [&](vtkIdType begin, vtkIdType end)
-    {
-      for (vtkIdType c = begin; c < end; ++c)
-      {
-        offsetValues[c] = static_cast<Value>(c * corners);
-        for (int k = 0; k < corners && c < cells; ++k)
-        {
-          idValues[c * corners + k] = static_cast<Value>(ids[c * corners + k]);
-        }
-      }
-    });
-  vtkNew<vtkCellArray> cellArray;
-  cellArray->SetData(offsets, connectivity);
-  return cellArray;
-}
-
 /// A cell array of cells with `corners` points each whose connectivity is `connectivity`
 /// itself, not a copy (a vtkTypeInt32Array or vtkTypeInt64Array): only the offsets are made.
 template <class Storage>
@@ -106,6 +75,28 @@ vtkSmartPointer<vtkCellArray> FixedSizeCellsSharing(Storage* connectivity, int c
   vtkNew<vtkCellArray> cellArray;
   cellArray->SetData(offsets, connectivity);
   return cellArray;
+}
+
+/// A cell array of cells with `corners` points each from their point ids (any integer type),
+/// stored with OutId ids (32- or 64-bit), copied in parallel.
+template <class OutId, class SourceId>
+vtkSmartPointer<vtkCellArray> FixedSizeCells(const std::vector<SourceId>& ids, int corners)
+{
+  using Storage =
+    typename std::conditional<sizeof(OutId) == 4, vtkTypeInt32Array, vtkTypeInt64Array>::type;
+  using Value = typename Storage::ValueType;
+  vtkNew<Storage> connectivity;
+  connectivity->SetNumberOfValues(static_cast<vtkIdType>(ids.size()));
+  Value* idValues = connectivity->GetPointer(0);
+  vtkSMPTools::For(0, static_cast<vtkIdType>(ids.size()),
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      for (vtkIdType i = begin; i < end; ++i)
+      {
+        idValues[i] = static_cast<Value>(ids[i]);
+      }
+    });
+  return FixedSizeCellsSharing(connectivity.GetPointer(), corners);
 }
 
 /// The cell array `name` ("Material" by default) as 64-bit integers (in parallel); empty

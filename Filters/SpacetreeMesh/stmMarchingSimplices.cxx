@@ -236,7 +236,6 @@ stm::Status CutVolume(CutRequest& request, stm::MarchingSimplices<Dim>& cutter,
     return stm::Status::Aborted();
   }
   output->SetCells(Dim == 3 ? VTK_TETRA : VTK_TRIANGLE, cellArray);
-  cellArray = nullptr;
 
   // Cell data from the parents; Material becomes the side's label.
   vtkCellData* inCD = input->GetCellData();
