@@ -1,0 +1,322 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Pieces of the root grid (RootPieces.h): the boxes partition the grid, and a piece meshed from
+// its ghost box alone has exactly the whole image's cells in its owned box, so adjacent pieces
+// match on their shared boundary and the pieces together are the whole mesh.
+
+#include "CoreTestUtilities.h"
+#include "Spacetree/RootPieces.h"
+
+namespace
+{
+using namespace stmtest;
+
+template <class DimensionTag>
+class RootPiecesTest : public ::testing::Test
+{
+};
+using RootPiecesDimensions = ::testing::Types<Dim<2>, Dim<3>, Dim<4>>;
+TYPED_TEST_SUITE(RootPiecesTest, RootPiecesDimensions);
+
+TYPED_TEST(RootPiecesTest, PiecesPartitionTheRootGrid)
+{
+  constexpr int D = TypeParam::value;
+  for (const stm::LatticeIndex<D>& dims : { UniformExtents<D>(1), UniformExtents<D>(3),
+         FirstExtents<D>({ 7, 2, 5, 3 }), FirstExtents<D>({ 2, 9, 4, 6 }) })
+  {
+    const std::int64_t cells = stm::NumberOfLatticeCells<D>(dims);
+    for (int pieces = 1; pieces <= 12; ++pieces)
+    {
+      SCOPED_TRACE("grid " + ToString<D>(dims) + ", " + std::to_string(pieces) + " pieces");
+      std::vector<int> owners(static_cast<std::size_t>(cells), 0);
+      std::int64_t smallest = cells, largest = 0, nonEmpty = 0;
+      for (int piece = 0; piece < pieces; ++piece)
+      {
+        const stm::RootBox<D> box = stm::PieceRootBox<D>(dims, pieces, piece);
+        ForEachIndex<D>(dims,
+          [&](const stm::LatticeIndex<D>& root)
+          { owners[stm::LinearIndex<D>(root, dims)] += box.Contains(root) ? 1 : 0; });
+        EXPECT_EQ(box.IsEmpty(), box.GetNumberOfCells() == 0);
+        nonEmpty += box.IsEmpty() ? 0 : 1;
+        smallest = std::min(smallest, box.GetNumberOfCells());
+        largest = std::max(largest, box.GetNumberOfCells());
+      }
+      EXPECT_TRUE(std::all_of(owners.begin(), owners.end(), [](int n) { return n == 1; }))
+        << "a root cell is not in exactly one piece";
+      // As many pieces get cells as the grid has cells for.
+      EXPECT_EQ(nonEmpty, std::min<std::int64_t>(pieces, cells));
+      if (pieces <= cells)
+      {
+        EXPECT_GE(smallest, 1);
+      }
+      EXPECT_LE(largest, std::max<std::int64_t>(1, 2 * cells / pieces + 2));
+    }
+  }
+  // Out of range: empty.
+  EXPECT_TRUE(stm::PieceRootBox<D>(UniformExtents<D>(4), 2, 2).IsEmpty());
+  EXPECT_TRUE(stm::PieceRootBox<D>(UniformExtents<D>(4), 0, 0).IsEmpty());
+  EXPECT_TRUE(stm::PieceRootBox<D>(UniformExtents<D>(4), 2, -1).IsEmpty());
+}
+
+TYPED_TEST(RootPiecesTest, BisectionHalvesTheLongestAxis)
+{
+  constexpr int D = TypeParam::value;
+  const stm::LatticeIndex<D> dims = FirstExtents<D>({ 3, 10, 2, 2 });
+  // Three pieces: axis 1 (the longest) is cut in half, at 5; the halves have as many cells, and
+  // the lower one gets 2 of the 3 pieces (1.5 rounded up), so it is cut again in half, at 2.
+  const stm::RootBox<D> first = stm::PieceRootBox<D>(dims, 3, 0);
+  const stm::RootBox<D> second = stm::PieceRootBox<D>(dims, 3, 1);
+  const stm::RootBox<D> third = stm::PieceRootBox<D>(dims, 3, 2);
+  EXPECT_EQ(first.Lower[1], 0);
+  EXPECT_EQ(first.Upper[1], 2);
+  EXPECT_EQ(second.Lower[1], 2);
+  EXPECT_EQ(second.Upper[1], 5);
+  EXPECT_EQ(third.Lower[1], 5);
+  EXPECT_EQ(third.Upper[1], 10);
+  for (const stm::RootBox<D>* box : { &first, &second, &third })
+  {
+    EXPECT_EQ(box->Lower[0], 0);
+    EXPECT_EQ(box->Upper[0], 3);
+  }
+}
+
+TYPED_TEST(RootPiecesTest, GhostBoxesGrowByOneAndStartEven)
+{
+  constexpr int D = TypeParam::value;
+  const stm::LatticeIndex<D> dims = FirstExtents<D>({ 9, 6, 5, 4 });
+  for (int pieces = 1; pieces <= 8; ++pieces)
+  {
+    for (int piece = 0; piece < pieces; ++piece)
+    {
+      const stm::RootBox<D> owned = stm::PieceRootBox<D>(dims, pieces, piece);
+      const stm::RootBox<D> ghost = stm::GhostRootBox<D>(owned, dims);
+      if (owned.IsEmpty())
+      {
+        EXPECT_TRUE(ghost.IsEmpty());
+        continue;
+      }
+      for (int axis = 0; axis < D; ++axis)
+      {
+        EXPECT_EQ(ghost.Lower[axis] % 2, 0);
+        EXPECT_GE(ghost.Lower[axis], 0);
+        EXPECT_LE(ghost.Upper[axis], dims[axis]);
+        EXPECT_LE(ghost.Lower[axis], std::max<std::int64_t>(0, owned.Lower[axis] - 1));
+        EXPECT_GE(ghost.Lower[axis], owned.Lower[axis] - 2);
+        EXPECT_EQ(ghost.Upper[axis], std::min(dims[axis], owned.Upper[axis] + 1));
+      }
+    }
+  }
+  stm::RootBox<D> owned;
+  owned.Lower = UniformExtents<D>(3);
+  owned.Upper = UniformExtents<D>(4);
+  const stm::RootBox<D> ghost = stm::GhostRootBox<D>(owned, UniformExtents<D>(8), 2);
+  EXPECT_EQ(ghost.Lower, UniformExtents<D>(0));
+  EXPECT_EQ(ghost.Upper, UniformExtents<D>(6));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Meshing piece by piece.
+
+/// A cell as the whole mesh has it: its corners in half lattice units of the whole image,
+/// sorted, and its material.
+template <int D>
+using CellKey = std::pair<std::vector<stm::LatticeIndex<D>>, stm::MaterialIndex>;
+
+/// The cells of `mesh` whose leaf lies in root box `owned` (in the mesh's own root indices),
+/// their corners moved by `offset` half units.
+template <int D>
+std::vector<CellKey<D>> OwnedCells(const TessellationMesh<D>& mesh, const stm::RootBox<D>& owned,
+  const stm::LatticeIndex<D>& rootHalfUnits, const stm::LatticeIndex<D>& offset)
+{
+  std::vector<CellKey<D>> keys;
+  for (std::int64_t cell = 0; cell < mesh.GetNumberOfCells(); ++cell)
+  {
+    const int size = mesh.GetCellSize(cell);
+    // A cell lies inside its leaf, so its corners' mean is inside it too.
+    stm::LatticeIndex<D> sum{};
+    for (int i = 0; i < size; ++i)
+    {
+      for (int axis = 0; axis < D; ++axis)
+      {
+        sum[axis] += mesh.CellPoint(cell, i)[axis];
+      }
+    }
+    stm::LatticeIndex<D> root;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      root[axis] = sum[axis] / (size * rootHalfUnits[axis]);
+    }
+    if (!owned.Contains(root))
+    {
+      continue;
+    }
+    CellKey<D> key;
+    key.second = mesh.Materials[cell];
+    for (int i = 0; i < size; ++i)
+    {
+      stm::LatticeIndex<D> point = mesh.CellPoint(cell, i);
+      for (int axis = 0; axis < D; ++axis)
+      {
+        point[axis] += offset[axis];
+      }
+      key.first.push_back(point);
+    }
+    std::sort(key.first.begin(), key.first.end());
+    keys.push_back(key);
+  }
+  std::sort(keys.begin(), keys.end());
+  return keys;
+}
+
+struct PieceCase
+{
+  int Split;                // split count of the pattern, every axis and level
+  std::int64_t MaxCellSize; // root edge in voxels
+  int BalanceLevel;
+  stm::CellTemplate Template;
+  stm::TessellationOutput Output;
+  bool IncludeBackground;
+};
+
+template <int D>
+void ExpectPiecesReproduceTheWholeMesh(const LabelImage<D>& image, const PieceCase& c)
+{
+  stm::SequentialExecutor executor;
+  stm::RefinementPlanOptions<D> planOptions;
+  planOptions.MaxCellSize = c.MaxCellSize;
+  planOptions.Pattern = UniformPattern<D>(c.Split);
+  stm::SpacetreeTessellationOptions tessellation;
+  tessellation.Template = c.Template;
+  tessellation.Output = c.Output;
+  tessellation.IncludeBackground = c.IncludeBackground;
+
+  stm::Spacetree<D> whole;
+  ASSERT_TRUE(
+    BuildTreeWithPlan<D>(image, planOptions, c.BalanceLevel, false, executor, whole).IsOk());
+  TessellationMesh<D> wholeMesh;
+  ASSERT_TRUE(TessellateTree<D>(whole, tessellation, executor, wholeMesh).IsOk());
+  const stm::LatticeIndex<D> rootDims = whole.RootGridDimensions;
+  stm::LatticeIndex<D> rootVoxels, rootHalfUnits;
+  for (int axis = 0; axis < D; ++axis)
+  {
+    ASSERT_EQ(whole.VoxelSubdivision[axis], 1);
+    rootVoxels[axis] = whole.GetRootCellSize()[axis];
+    rootHalfUnits[axis] = 2 * rootVoxels[axis];
+  }
+  stm::RootBox<D> everything;
+  everything.Upper = rootDims;
+  const std::vector<CellKey<D>> expected =
+    OwnedCells<D>(wholeMesh, everything, rootHalfUnits, stm::LatticeIndex<D>{});
+  ASSERT_EQ(static_cast<std::int64_t>(expected.size()), wholeMesh.GetNumberOfCells());
+  ASSERT_GT(stm::NumberOfLatticeCells<D>(rootDims), 2);
+
+  for (int pieces : { 2, 3, 5 })
+  {
+    std::vector<CellKey<D>> together;
+    for (int piece = 0; piece < pieces; ++piece)
+    {
+      SCOPED_TRACE("piece " + std::to_string(piece) + " of " + std::to_string(pieces));
+      const stm::RootBox<D> owned = stm::PieceRootBox<D>(rootDims, pieces, piece);
+      if (owned.IsEmpty())
+      {
+        continue;
+      }
+      const stm::RootBox<D> ghost = stm::GhostRootBox<D>(owned, rootDims);
+      // The piece's image: the voxels of its ghost box, clipped to the image.
+      stm::LatticeIndex<D> first, dims, halfOffset;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        first[axis] = ghost.Lower[axis] * rootVoxels[axis];
+        dims[axis] =
+          std::min(image.GetDimensions()[axis], ghost.Upper[axis] * rootVoxels[axis]) - first[axis];
+        halfOffset[axis] = 2 * first[axis];
+      }
+      LabelImage<D> part(dims);
+      ForEachIndex<D>(dims,
+        [&](const stm::LatticeIndex<D>& voxel)
+        {
+          stm::LatticeIndex<D> source;
+          for (int axis = 0; axis < D; ++axis)
+          {
+            source[axis] = first[axis] + voxel[axis];
+          }
+          part.Set(voxel, image.At(source));
+        });
+      // The whole image's root edge: the piece alone may be too small for the plan to reach it.
+      stm::RefinementPlanOptions<D> pieceOptions = planOptions;
+      pieceOptions.RootCellSize = rootVoxels;
+      stm::Spacetree<D> tree;
+      // The whole image's material table, as the filter passes it.
+      stm::Status built = stm::SpacetreeBuilder<D>().Build(
+        part.View(), MaterialLabels(image.LargestMaterial() + 1), pieceOptions, tree, executor);
+      ASSERT_TRUE(built.IsOk()) << built.GetMessage();
+      if (c.BalanceLevel > 0)
+      {
+        stm::SpacetreeBalanceOptions balanceOptions;
+        balanceOptions.BalanceLevel = c.BalanceLevel;
+        ASSERT_TRUE(stm::SpacetreeBalancer<D>().Balance(tree, balanceOptions, executor).IsOk());
+      }
+      TessellationMesh<D> mesh;
+      ASSERT_TRUE(TessellateTree<D>(tree, tessellation, executor, mesh).IsOk());
+      stm::RootBox<D> local;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        local.Lower[axis] = owned.Lower[axis] - ghost.Lower[axis];
+        local.Upper[axis] = owned.Upper[axis] - ghost.Lower[axis];
+      }
+      const std::vector<CellKey<D>> cells = OwnedCells<D>(mesh, local, rootHalfUnits, halfOffset);
+      stm::RootBox<D> ownedWhole = owned;
+      const std::vector<CellKey<D>> wholeCells =
+        OwnedCells<D>(wholeMesh, ownedWhole, rootHalfUnits, stm::LatticeIndex<D>{});
+      EXPECT_EQ(cells.size(), wholeCells.size());
+      EXPECT_TRUE(cells == wholeCells) << "the piece's own cells are not the whole mesh's";
+      together.insert(together.end(), cells.begin(), cells.end());
+    }
+    std::sort(together.begin(), together.end());
+    EXPECT_TRUE(together == expected) << pieces << " pieces together are not the whole mesh ("
+                                      << together.size() << " of " << expected.size() << " cells)";
+  }
+}
+
+std::string Describe(const PieceCase& c)
+{
+  return "split " + std::to_string(c.Split) + ", root " + std::to_string(c.MaxCellSize) + ", L " +
+    std::to_string(c.BalanceLevel) +
+    (c.Template == stm::CellTemplate::Kuhn ? ", Kuhn" : ", checkerboard") +
+    (c.Output == stm::TessellationOutput::Hybrid ? ", hybrid" : ", simplices") +
+    (c.IncludeBackground ? ", with background" : "");
+}
+
+class RootPiecesMeshTest : public ::testing::Test
+{
+};
+
+const PieceCase PieceCases[] = {
+  { 2, 8, 1, stm::CellTemplate::Checkerboard, stm::TessellationOutput::Simplices, false },
+  { 2, 8, 1, stm::CellTemplate::Kuhn, stm::TessellationOutput::Simplices, true },
+  { 2, 8, 2, stm::CellTemplate::Checkerboard, stm::TessellationOutput::Hybrid, false },
+  { 2, 4, 0, stm::CellTemplate::Checkerboard, stm::TessellationOutput::Simplices, true },
+  { 3, 9, 1, stm::CellTemplate::Checkerboard, stm::TessellationOutput::Simplices, true },
+  { 3, 9, 1, stm::CellTemplate::Checkerboard, stm::TessellationOutput::Hybrid, false },
+};
+
+TEST_F(RootPiecesMeshTest, PiecesReproduceTheWholeMesh2D)
+{
+  const LabelImage<2> image = MakeRandomImage<2>(FirstExtents<2>({ 75, 58 }), 39, 3, 7, 25);
+  for (const PieceCase& c : PieceCases)
+  {
+    SCOPED_TRACE(Describe(c));
+    ExpectPiecesReproduceTheWholeMesh<2>(image, c);
+  }
+}
+
+TEST_F(RootPiecesMeshTest, PiecesReproduceTheWholeMesh3D)
+{
+  const LabelImage<3> image = MakeRandomImage<3>(FirstExtents<3>({ 38, 29, 25 }), 40, 3, 6, 15);
+  for (const PieceCase& c : PieceCases)
+  {
+    SCOPED_TRACE(Describe(c));
+    ExpectPiecesReproduceTheWholeMesh<3>(image, c);
+  }
+}
+
+} // namespace
