@@ -201,6 +201,10 @@ struct BoundarySmoothOptions
   std::int64_t BackgroundMaterial = 0;
   /// Rounds tentative positions to float before validation (for float point arrays).
   bool SinglePrecision = false;
+  /// Per point, non-zero for a point that no step moves (nullptr: none), e.g. the points of a
+  /// piece's ghost cells, so that adjacent pieces keep their shared points. Held points count
+  /// as fixed and are their neighbours' fixed neighbours.
+  const std::uint8_t* HeldPoints = nullptr;
 };
 
 struct BoundarySmoothStats
@@ -1256,6 +1260,15 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   }
   this->ConstrainJunctions(connectivity, materials, surfaceMasks, executor);
   std::vector<std::uint8_t>().swap(surfaceMasks);
+  if (options.HeldPoints)
+  {
+    // After the junctions, which may read any surface point, and before the interior layers,
+    // which then stop at held points.
+    for (std::int64_t p = 0; p < numberOfPoints; ++p)
+    {
+      this->Roles[p] = options.HeldPoints[p] ? static_cast<std::uint8_t>(Fixed) : this->Roles[p];
+    }
+  }
 
   // Interior layers by edge hops from the surface: layer k + 1 is the points without a role
   // that share a cell with a point of layer k (layer 0: the surface points). Each layer's points

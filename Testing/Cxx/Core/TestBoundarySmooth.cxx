@@ -419,6 +419,48 @@ TYPED_TEST(BoundarySmoothTest, MaxDisplacementIsRespected)
   EXPECT_GT(largest, 0.04); // the bound is what limits Laplacian here
 }
 
+// Held points (a piece's ghost points) stay bit for bit, and the others are smoothed as usual
+// next to them: points on both sides of the plane x = centre move without them.
+TYPED_TEST(BoundarySmoothTest, HeldPointsStayWhereTheyAre)
+{
+  constexpr int D = TypeParam::value;
+  const SmoothMesh<D> input = CutBall<D>(Extent<D>(), 0.35);
+  std::vector<std::uint8_t> held(static_cast<std::size_t>(input.NumberOfPoints()), 0);
+  for (std::int64_t p = 0; p < input.NumberOfPoints(); ++p)
+  {
+    held[p] = input.Points[p * D] < input.Centre[0] ? 1 : 0;
+  }
+  SmoothMesh<D> free = input;
+  stm::BoundarySmoothOptions options;
+  Smooth<D>(free, options);
+  SmoothMesh<D> mesh = input;
+  options.HeldPoints = held.data();
+  std::vector<std::uint8_t> roles;
+  const stm::BoundarySmoothStats stats = Smooth<D>(mesh, options, &roles);
+  std::int64_t movedHeld = 0, movedOther = 0, movedWithoutHolding = 0;
+  for (std::int64_t p = 0; p < input.NumberOfPoints(); ++p)
+  {
+    const bool moved = !std::equal(
+      mesh.Points.begin() + p * D, mesh.Points.begin() + (p + 1) * D, input.Points.begin() + p * D);
+    const bool movedFree = !std::equal(
+      free.Points.begin() + p * D, free.Points.begin() + (p + 1) * D, input.Points.begin() + p * D);
+    movedHeld += held[p] && moved;
+    movedOther += !held[p] && moved;
+    movedWithoutHolding += held[p] && movedFree;
+    if (held[p])
+    {
+      EXPECT_EQ(roles[p], stm::BoundarySmoother<D>::Fixed);
+    }
+  }
+  EXPECT_EQ(movedHeld, 0);
+  EXPECT_GT(movedOther, 10);
+  EXPECT_GT(movedWithoutHolding, 10); // the held half would have moved
+  EXPECT_GE(stats.FixedPoints,
+    static_cast<std::int64_t>(std::count(held.begin(), held.end(), std::uint8_t{ 1 })));
+  const stm::MeshInvariantReport report = Check<D>(mesh);
+  EXPECT_TRUE(report.IsValid()) << report.Summary();
+}
+
 // A projector onto the sphere (Newton steps, Cut/LevelSetProjection.h) puts every moved surface
 // point on it; most surface points move (the others stay where a move would cost quality).
 TYPED_TEST(BoundarySmoothTest, ProjectorPutsSurfacePointsOntoTheSphere)
