@@ -13,6 +13,7 @@
 #include "vtkCellData.h"
 #include "vtkCellType.h"
 #include "vtkDataArray.h"
+#include "vtkDataSetAttributes.h"
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
 #include "vtkIdList.h"
@@ -242,6 +243,35 @@ stm::Status SplitEdges(SmoothRequest& request, const IdType* connectivity,
   return stm::Status::Ok();
 }
 
+/// For a piece (stmImageToSpacetree::SplitIntoPieces), 1 at the points of its ghost cells,
+/// which the smoothing holds so that adjacent pieces keep their shared points; empty for a mesh
+/// without ghost cells.
+template <int Dim, class IdType>
+std::vector<std::uint8_t> GhostCellPoints(vtkUnstructuredGrid* input, const IdType* connectivity)
+{
+  auto* ghosts = vtkUnsignedCharArray::SafeDownCast(
+    input->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName()));
+  std::vector<std::uint8_t> held;
+  if (!ghosts)
+  {
+    return held;
+  }
+  const unsigned char* flags = ghosts->GetPointer(0);
+  for (vtkIdType c = 0; c < ghosts->GetNumberOfValues(); ++c)
+  {
+    if (flags[c] == 0)
+    {
+      continue;
+    }
+    held.resize(static_cast<std::size_t>(input->GetNumberOfPoints()), 0);
+    for (int v = 0; v <= Dim; ++v)
+    {
+      held[static_cast<std::size_t>(connectivity[c * (Dim + 1) + v])] = 1;
+    }
+  }
+  return held;
+}
+
 template <int Dim, class IdType>
 stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
 {
@@ -256,6 +286,8 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
     ? stmCutInput::CellMaterials(input, "OriginalMaterial")
     : std::vector<std::int64_t>();
   request.Options.VolumeTargetMaterials = originals.empty() ? nullptr : originals.data();
+  const std::vector<std::uint8_t> held = GhostCellPoints<Dim>(input, connectivity);
+  request.Options.HeldPoints = held.empty() ? nullptr : held.data();
 
   // The projector: Newton steps onto f = 0 of the implicit function, in the frame. VTK's
   // implicit functions may update a transform when evaluated, so evaluations are serialised.
@@ -328,6 +360,7 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
   }
   std::vector<std::int64_t>().swap(originals);
   request.Options.VolumeTargetMaterials = nullptr;
+  request.Options.HeldPoints = nullptr;
 
   // The output: the input's cells and arrays, the moved points in the input's precision.
   vtkUnstructuredGrid* output = request.Output;
@@ -361,7 +394,9 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
     });
   output->SetPoints(moved);
   output->GetPointData()->AddArray(displacement);
-  if (!request.Filter->GetSplitInteriorEdges() || request.Filter->GetAbortExecute())
+  // Not in a piece: whether an edge on its boundary is split depends on both sides' moves.
+  if (!request.Filter->GetSplitInteriorEdges() || !held.empty() ||
+    request.Filter->GetAbortExecute())
   {
     return stm::Status::Ok();
   }

@@ -39,6 +39,10 @@
  * depend on the number of threads (see Filters/Core/Smooth/BoundarySmooth.h for the method and its
  * decisions).
  *
+ * A piece of a larger mesh (stmImageToSpacetree::SplitIntoPieces), whose ghost cells carry
+ * vtkGhostType: the points of the ghost cells are held where they are and no edge is split, so
+ * that adjacent pieces keep the points they share.
+ *
  * @sa stmMarchingSimplices stmSeparatingFunction
  */
 

@@ -183,10 +183,10 @@ inline int SimplexDimension(vtkUnstructuredGrid* input, const char* remedy, std:
 }
 
 /// The checks every simplicial filter makes first: -1 when an upstream filter was aborted or the
-/// request is for an empty piece after the first (stmPieces.h) (the filter then returns 1 with an
-/// empty output, quietly); 0 with `error` set when the input has no cells, or cells that are not
-/// all tetrahedra or all triangles (`remedy` says what to do), or is a later piece with cells;
-/// else the dimension, 3 or 2.
+/// request is for one of several pieces with an empty input (stmPieces::SkipsPiece) (the filter
+/// then returns 1 with an empty output, quietly); 0 with `error` set when the input has no
+/// cells, or cells that are not all tetrahedra or all triangles (`remedy` says what to do), or
+/// is a later piece with cells not made by SplitIntoPieces; else the dimension, 3 or 2.
 inline int Preflight(vtkInformationVector* inputVector, vtkUnstructuredGrid* input,
   const char* remedy, std::string& error)
 {
@@ -195,7 +195,7 @@ inline int Preflight(vtkInformationVector* inputVector, vtkUnstructuredGrid* inp
   {
     return -1;
   }
-  if (stmPieces::IsLaterPiece(inInfo, input, error))
+  if (stmPieces::SkipsPiece(inInfo, input, error))
   {
     return error.empty() ? -1 : 0;
   }

@@ -7,6 +7,7 @@
 
 #include "Balance/SpacetreeGrading.h"
 #include "Spacetree/RefinementPlan.h"
+#include "Spacetree/RootPieces.h"
 #include "Spacetree/SpacetreeBuild.h"
 #include "Spacetree/ThinParts.h"
 
@@ -23,6 +24,7 @@
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
 #include "vtkSMPTools.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkUnstructuredGrid.h"
 
 #include <algorithm>
@@ -163,23 +165,17 @@ struct BuildReport
 /// the later stages are allowed to cover.
 constexpr std::int64_t MaximumLatticeCells = std::int64_t{ 1 } << 30;
 
+/// The level table's options from the request and the image's geometry and size.
 template <int Dim>
-bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxelDims[3],
-  stmSpacetreeGeometry geometry, const std::vector<long long>& materialLabels,
-  const RefinementRequest& request, stmSMPExecutor& executor, vtkUnstructuredGrid* output,
-  BuildReport& report, std::string& error)
+bool MakePlanOptions(const RefinementRequest& request, const stmSpacetreeGeometry& geometry,
+  stm::RefinementPlanOptions<Dim>& planOptions, std::string& error)
 {
-  stm::MaterialImage<Dim> image;
-  stm::RefinementPlanOptions<Dim> planOptions;
   for (int axis = 0; axis < Dim; ++axis)
   {
-    const int imageAxis = geometry.ImageAxes[axis];
-    image.Dimensions[axis] = voxelDims[imageAxis];
-    const double* vector = geometry.AxisVectors[imageAxis];
+    const double* vector = geometry.AxisVectors[geometry.ImageAxes[axis]];
     planOptions.Spacing[axis] =
       std::sqrt(vector[0] * vector[0] + vector[1] * vector[1] + vector[2] * vector[2]);
   }
-  image.Values = materials.data();
 
   // The pattern, per spacetree axis: three counts per image axis, or Dim counts.
   std::vector<std::vector<int>> entries;
@@ -218,6 +214,136 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
     }
   }
   planOptions.MaxCellSize = request.MaxCellSize;
+  return true;
+}
+
+/// Where a piece lies (stmImageToSpacetree::SplitIntoPieces), per spacetree axis unless said:
+/// its own root cells and the first of its ghost box, in the whole image's root grid, and the
+/// voxels of the ghost box (clipped to the image), counted from the whole image's first voxel.
+struct PieceLayout
+{
+  /// SplitIntoPieces is on and the request is for one of several pieces.
+  bool Split = false;
+  bool Empty = true;
+  int WholeExtent[6] = { 0, -1, 0, -1, 0, -1 };
+  /// Per image axis.
+  int WholeVoxelDims[3] = { 1, 1, 1 };
+  int Dimension = 0;
+  int ImageAxes[3] = { 0, 1, 2 };
+  long long RootVoxels[3] = { 1, 1, 1 };
+  long long OwnedLower[3] = { 0, 0, 0 };
+  long long OwnedUpper[3] = { 0, 0, 0 };
+  long long GhostLower[3] = { 0, 0, 0 };
+  long long FirstVoxel[3] = { 0, 0, 0 };
+  long long VoxelCount[3] = { 1, 1, 1 };
+};
+
+/// Lays out piece `piece` of `pieces` of an image of wholeVoxelDims voxels (per image axis),
+/// with the root cells the whole image's plan gives.
+template <int Dim>
+bool LayOutPiece(const RefinementRequest& request, const stmSpacetreeGeometry& geometry,
+  const int wholeVoxelDims[3], int pieces, int piece, PieceLayout& layout, std::string& error)
+{
+  stm::RefinementPlanOptions<Dim> options;
+  if (!MakePlanOptions<Dim>(request, geometry, options, error))
+  {
+    return false;
+  }
+  stm::LatticeIndex<Dim> dims;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    dims[axis] = wholeVoxelDims[geometry.ImageAxes[axis]];
+  }
+  stm::RefinementPlan<Dim> plan;
+  const stm::Status status = stm::PlanRefinement<Dim>(dims, options, plan);
+  if (!status.IsOk())
+  {
+    error = status.GetMessage();
+    return false;
+  }
+  stm::LatticeIndex<Dim> rootDims;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    layout.RootVoxels[axis] = plan.CellSizes[0][axis] / plan.VoxelSubdivision[axis];
+    rootDims[axis] = (dims[axis] + layout.RootVoxels[axis] - 1) / layout.RootVoxels[axis];
+  }
+  const stm::RootBox<Dim> owned = stm::PieceRootBox<Dim>(rootDims, pieces, piece);
+  const stm::RootBox<Dim> ghost = stm::GhostRootBox<Dim>(owned, rootDims);
+  layout.Empty = owned.IsEmpty();
+  for (int axis = 0; axis < Dim && !layout.Empty; ++axis)
+  {
+    layout.OwnedLower[axis] = owned.Lower[axis];
+    layout.OwnedUpper[axis] = owned.Upper[axis];
+    layout.GhostLower[axis] = ghost.Lower[axis];
+    layout.FirstVoxel[axis] = ghost.Lower[axis] * layout.RootVoxels[axis];
+    layout.VoxelCount[axis] =
+      std::min<long long>(dims[axis], ghost.Upper[axis] * layout.RootVoxels[axis]) -
+      layout.FirstVoxel[axis];
+  }
+  return true;
+}
+
+/// The image geometry the plan sees: the spanned axes (more than one voxel) and the voxel
+/// edges (spacing times the direction matrix's columns; identity without one).
+stmSpacetreeGeometry ImageGeometry(
+  const int voxelDims[3], const double spacing[3], const double* direction)
+{
+  stmSpacetreeGeometry geometry;
+  geometry.Dimension = 0;
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    if (voxelDims[axis] > 1)
+    {
+      geometry.ImageAxes[geometry.Dimension++] = axis;
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      geometry.AxisVectors[axis][c] =
+        (direction ? direction[3 * c + axis] : (c == axis ? 1.0 : 0.0)) * spacing[axis];
+    }
+  }
+  return geometry;
+}
+
+/// Copies the block [first, first + count) (per image axis) of a voxel array of dims voxels.
+template <class T>
+std::vector<T> CropVoxels(
+  const std::vector<T>& values, const int dims[3], const long long first[3], const int count[3])
+{
+  std::vector<T> block(static_cast<std::size_t>(count[0]) * count[1] * count[2]);
+  vtkSMPTools::For(0, static_cast<vtkIdType>(count[1]) * count[2],
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      for (vtkIdType row = begin; row < end; ++row)
+      {
+        const long long y = first[1] + row % count[1];
+        const long long z = first[2] + row / count[1];
+        const auto* source = values.data() + (z * dims[1] + y) * dims[0] + first[0];
+        std::copy(source, source + count[0], block.data() + row * count[0]);
+      }
+    });
+  return block;
+}
+
+template <int Dim>
+bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxelDims[3],
+  const int planVoxelDims[3], const PieceLayout* piece, stmSpacetreeGeometry geometry,
+  const std::vector<long long>& materialLabels, const RefinementRequest& request,
+  stmSMPExecutor& executor, vtkUnstructuredGrid* output, BuildReport& report, std::string& error)
+{
+  stm::MaterialImage<Dim> image;
+  stm::LatticeIndex<Dim> planDims;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    image.Dimensions[axis] = voxelDims[geometry.ImageAxes[axis]];
+    planDims[axis] = planVoxelDims[geometry.ImageAxes[axis]];
+  }
+  image.Values = materials.data();
+  stm::RefinementPlanOptions<Dim> planOptions;
+  if (!MakePlanOptions<Dim>(request, geometry, planOptions, error))
+  {
+    return false;
+  }
   double finest = request.InRegion.empty() ? 0.0 : request.RegionMaxCellSize;
   for (double size : request.Sizing)
   {
@@ -280,7 +406,8 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
         0.5 * *std::min_element(planOptions.Spacing.begin(), planOptions.Spacing.end());
       planOptions.FinestSize = finest > 0 ? std::min(finest, half) : half;
     }
-    return stm::PlanRefinement<Dim>(image.Dimensions, planOptions, result);
+    // A piece plans with the whole image's size, so that its root cells are the whole's.
+    return stm::PlanRefinement<Dim>(planDims, planOptions, result);
   };
   auto latticeCellsOf = [&](const stm::RefinementPlan<Dim>& result)
   {
@@ -307,6 +434,14 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
   {
     error = status.GetMessage();
     return false;
+  }
+  for (int axis = 0; axis < Dim && piece; ++axis)
+  {
+    if (plan.CellSizes[0][axis] / plan.VoxelSubdivision[axis] != piece->RootVoxels[axis])
+    {
+      error = "the piece's root cells differ from those its voxels were requested for";
+      return false;
+    }
   }
   const std::int64_t latticeCells = latticeCellsOf(plan);
   if (latticeCells > MaximumLatticeCells)
@@ -393,6 +528,7 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
   // The lattice unit is a fraction of the voxel where cells were refined below it.
   for (int axis = 0; axis < Dim; ++axis)
   {
+    geometry.LatticeOffset[axis] *= static_cast<double>(plan.VoxelSubdivision[axis]);
     for (int c = 0; c < 3; ++c)
     {
       geometry.AxisVectors[geometry.ImageAxes[axis]][c] /=
@@ -401,6 +537,63 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
   }
   stmSpacetreeData::WriteSpacetree<Dim>(tree, geometry, output);
   return true;
+}
+/// Lays out the piece the output's request (outInfo) asks for, from the image's information
+/// (inInfo); false with `error` when it cannot.
+bool LayOutRequestedPiece(stmImageToSpacetree* filter, vtkInformation* outInfo,
+  vtkInformation* inInfo, bool cellLabels, const double* direction, PieceLayout& piece,
+  std::string& error)
+{
+  using Pipeline = vtkStreamingDemandDrivenPipeline;
+  piece = PieceLayout();
+  const int pieces = stmPieces::RequestedNumberOfPieces(outInfo);
+  if (!filter->GetSplitIntoPieces() || pieces <= 1)
+  {
+    return true;
+  }
+  if (!inInfo || !inInfo->Has(Pipeline::WHOLE_EXTENT()))
+  {
+    error = "Split Into Pieces needs the image's whole extent from upstream";
+    return false;
+  }
+  piece.Split = true;
+  inInfo->Get(Pipeline::WHOLE_EXTENT(), piece.WholeExtent);
+  int voxelDims[3];
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    const int points = piece.WholeExtent[2 * axis + 1] - piece.WholeExtent[2 * axis] + 1;
+    voxelDims[axis] = cellLabels ? std::max(1, points - 1) : points;
+    piece.WholeVoxelDims[axis] = voxelDims[axis];
+  }
+  double spacing[3] = { 1, 1, 1 };
+  if (inInfo->Has(vtkDataObject::SPACING()))
+  {
+    inInfo->Get(vtkDataObject::SPACING(), spacing);
+  }
+  const stmSpacetreeGeometry geometry = ImageGeometry(voxelDims, spacing, direction);
+  if (geometry.Dimension < 2)
+  {
+    error = "Split Into Pieces needs a 2D or 3D image";
+    return false;
+  }
+  RefinementRequest request;
+  request.Pattern = filter->GetRefinementPattern();
+  filter->GetRootCellSize(request.RootCellSize);
+  request.MaxCellSize = filter->GetMaxCellSize();
+  piece.Dimension = geometry.Dimension;
+  std::copy(geometry.ImageAxes, geometry.ImageAxes + 3, piece.ImageAxes);
+  const int number = stmPieces::RequestedPiece(outInfo);
+  return geometry.Dimension == 3
+    ? LayOutPiece<3>(request, geometry, voxelDims, pieces, number, piece, error)
+    : LayOutPiece<2>(request, geometry, voxelDims, pieces, number, piece, error);
+}
+
+/// Whether the label array selection names a cell array (known before the data arrive).
+bool LabelsAreCellData(vtkAlgorithm* filter)
+{
+  vtkInformation* selection = filter->GetInputArrayInformation(0);
+  return selection && selection->Has(vtkDataObject::FIELD_ASSOCIATION()) &&
+    selection->Get(vtkDataObject::FIELD_ASSOCIATION()) == vtkDataObject::FIELD_ASSOCIATION_CELLS;
 }
 } // namespace
 
@@ -568,6 +761,7 @@ void stmImageToSpacetree::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfThinVoxels: " << this->NumberOfThinVoxels << "\n";
   os << indent << "NumberOfMinorityCornerVoxels: " << this->NumberOfMinorityCornerVoxels << "\n";
   os << indent << "UseSizingArray: " << (this->UseSizingArray ? "On" : "Off") << "\n";
+  os << indent << "SplitIntoPieces: " << (this->SplitIntoPieces ? "On" : "Off") << "\n";
 }
 
 int stmImageToSpacetree::FillInputPortInformation(int, vtkInformation* info)
@@ -579,8 +773,37 @@ int stmImageToSpacetree::FillInputPortInformation(int, vtkInformation* info)
 int stmImageToSpacetree::RequestUpdateExtent(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  stmPieces::RequestWholeImageOnFirstPiece(
-    outputVector->GetInformationObject(0), inputVector[0]->GetInformationObject(0));
+  using Pipeline = vtkStreamingDemandDrivenPipeline;
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
+  const bool cellLabels = LabelsAreCellData(this);
+  const double* direction = inInfo && inInfo->Has(vtkDataObject::DIRECTION())
+    ? inInfo->Get(vtkDataObject::DIRECTION())
+    : nullptr;
+  PieceLayout piece;
+  std::string error;
+  if (!LayOutRequestedPiece(this, outInfo, inInfo, cellLabels, direction, piece, error) ||
+    !piece.Split)
+  {
+    // RequestData reports a failed layout.
+    stmPieces::RequestWholeImageOnFirstPiece(outInfo, inInfo);
+    return 1;
+  }
+  int extent[6] = { 0, -1, 0, -1, 0, -1 };
+  if (!piece.Empty)
+  {
+    std::copy(piece.WholeExtent, piece.WholeExtent + 6, extent);
+    for (int i = 0; i < piece.Dimension; ++i)
+    {
+      const int axis = piece.ImageAxes[i];
+      extent[2 * axis] = piece.WholeExtent[2 * axis] + static_cast<int>(piece.FirstVoxel[i]);
+      extent[2 * axis + 1] =
+        extent[2 * axis] + static_cast<int>(piece.VoxelCount[i]) - 1 + (cellLabels ? 1 : 0);
+    }
+  }
+  inInfo->Set(Pipeline::UPDATE_PIECE_NUMBER(), 0);
+  inInfo->Set(Pipeline::UPDATE_NUMBER_OF_PIECES(), 1);
+  inInfo->Set(Pipeline::UPDATE_EXTENT(), extent, 6);
   return 1;
 }
 
@@ -589,7 +812,9 @@ int stmImageToSpacetree::RequestData(
 {
   vtkImageData* input = vtkImageData::GetData(inputVector[0], 0);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
-  if (output && stmPieces::RequestedPiece(outputVector->GetInformationObject(0)) > 0)
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  const bool splitting = this->SplitIntoPieces && stmPieces::RequestedNumberOfPieces(outInfo) > 1;
+  if (output && !splitting && stmPieces::RequestedPiece(outInfo) > 0)
   {
     output->Initialize(); // piece 0 meshes the whole image
     return 1;
@@ -697,14 +922,48 @@ int stmImageToSpacetree::RequestData(
     }
   }
   // The first voxel has the extent's first index, not 0, in an image that is part of a larger
-  // one (ExtractSubset's VOI, a streamed piece): the lattice starts at that voxel.
+  // one (ExtractSubset's VOI, a streamed piece): the lattice starts at that voxel. A piece's
+  // lattice starts where the whole image's does, and its voxels are counted from there
+  // (LatticeOffset), so that its points are the whole image's, bit for bit.
   int extent[6];
   input->GetExtent(extent);
+  PieceLayout piece;
+  if (splitting)
+  {
+    std::string error;
+    if (!LayOutRequestedPiece(this, outInfo, inputVector[0]->GetInformationObject(0), cellLabels,
+          direction, piece, error))
+    {
+      vtkErrorMacro("ImageToSpacetree failed: " << error);
+      return 0;
+    }
+    if (piece.Empty)
+    {
+      output->Initialize(); // more pieces than root cells
+      return 1;
+    }
+    for (int i = 0; i < geometry.Dimension; ++i)
+    {
+      const int axis = geometry.ImageAxes[i];
+      const long long first = extent[2 * axis] - piece.WholeExtent[2 * axis];
+      if (piece.ImageAxes[i] != axis || first > piece.FirstVoxel[i] ||
+        first + voxelDims[axis] < piece.FirstVoxel[i] + piece.VoxelCount[i])
+      {
+        vtkErrorMacro("ImageToSpacetree failed: the image's extent ("
+          << extent[0] << " " << extent[1] << " " << extent[2] << " " << extent[3] << " "
+          << extent[4] << " " << extent[5] << ") does not hold the voxels of piece "
+          << stmPieces::RequestedPiece(outInfo) << " and its ghost layer.");
+        return 0;
+      }
+      geometry.LatticeOffset[i] = static_cast<double>(first);
+    }
+  }
   for (int axis = 0; axis < 3; ++axis)
   {
+    const int first = splitting ? piece.WholeExtent[2 * axis] : extent[2 * axis];
     for (int c = 0; c < 3; ++c)
     {
-      geometry.Origin[c] += extent[2 * axis] * geometry.AxisVectors[axis][c];
+      geometry.Origin[c] += first * geometry.AxisVectors[axis][c];
     }
   }
   if (!cellLabels)
@@ -742,6 +1001,11 @@ int stmImageToSpacetree::RequestData(
         body.push_back(label);
       }
     }
+    if (body.empty() && splitting)
+    {
+      output->Initialize(); // the body lies in other pieces
+      return 1;
+    }
     if (body.empty())
     {
       vtkErrorMacro("The body of interest is empty: the image holds no label other than the "
@@ -764,7 +1028,7 @@ int stmImageToSpacetree::RequestData(
                                        "BackgroundLabel.");
         return 0;
       }
-      if (!std::binary_search(collect.Labels.begin(), collect.Labels.end(), label))
+      if (!splitting && !std::binary_search(collect.Labels.begin(), collect.Labels.end(), label))
       {
         vtkErrorMacro("Body label " << label << " does not occur in the label array \""
                                     << (labels->GetName() ? labels->GetName() : "") << "\".");
@@ -804,10 +1068,20 @@ int stmImageToSpacetree::RequestData(
     vtkErrorMacro("Grading must be 0 (off) or at least 1.5, got " << this->Grading << ".");
     return 0;
   }
+  if (this->Grading != 0 && splitting)
+  {
+    // Grading reaches further than one root cell: the pieces would not match.
+    vtkErrorMacro("Grading is not supported with Split Into Pieces.");
+    return 0;
+  }
   request.MaterialMaxCellSizes.assign(materialLabels.size(), 0.0);
   for (const auto& entry : this->LabelMaxCellSizes)
   {
     const auto found = std::lower_bound(body.begin(), body.end(), entry.first);
+    if ((found == body.end() || *found != entry.first) && splitting)
+    {
+      continue; // a label of another piece
+    }
     if (found == body.end() || *found != entry.first)
     {
       vtkErrorMacro("LabelMaxCellSizes names label " << entry.first
@@ -863,7 +1137,9 @@ int stmImageToSpacetree::RequestData(
           request.InRegion[v] = halfBand > 0 ? std::abs(value) <= halfBand : value <= 0;
         }
       });
-    if (std::find(request.InRegion.begin(), request.InRegion.end(), 1) == request.InRegion.end())
+    // A piece may lie away from the region.
+    if (!splitting &&
+      std::find(request.InRegion.begin(), request.InRegion.end(), 1) == request.InRegion.end())
     {
       vtkErrorMacro("The refinement region contains no voxel centre of the image: it lies "
                     "outside the image or is thinner than a voxel.");
@@ -910,6 +1186,35 @@ int stmImageToSpacetree::RequestData(
     return 1;
   }
 
+  // A piece: its ghost box's voxels only, planned as the whole image.
+  int planVoxelDims[3] = { voxelDims[0], voxelDims[1], voxelDims[2] };
+  if (splitting)
+  {
+    long long first[3] = { 0, 0, 0 };
+    int count[3] = { voxelDims[0], voxelDims[1], voxelDims[2] };
+    geometry.IsPiece = true;
+    for (int i = 0; i < geometry.Dimension; ++i)
+    {
+      const int axis = geometry.ImageAxes[i];
+      first[axis] = piece.FirstVoxel[i] - static_cast<long long>(geometry.LatticeOffset[i]);
+      count[axis] = static_cast<int>(piece.VoxelCount[i]);
+      geometry.LatticeOffset[i] = static_cast<double>(piece.FirstVoxel[i]);
+      geometry.OwnedRootLower[i] = piece.OwnedLower[i] - piece.GhostLower[i];
+      geometry.OwnedRootUpper[i] = piece.OwnedUpper[i] - piece.GhostLower[i];
+    }
+    std::copy(piece.WholeVoxelDims, piece.WholeVoxelDims + 3, planVoxelDims);
+    materials = CropVoxels(materials, voxelDims, first, count);
+    if (!request.InRegion.empty())
+    {
+      request.InRegion = CropVoxels(request.InRegion, voxelDims, first, count);
+    }
+    if (!request.Sizing.empty())
+    {
+      request.Sizing = CropVoxels(request.Sizing, voxelDims, first, count);
+    }
+    std::copy(count, count + 3, voxelDims);
+  }
+
   stmSMPExecutor executor(this);
   executor.SetProgressRange(0.25, 0.9);
   std::string error;
@@ -917,10 +1222,10 @@ int stmImageToSpacetree::RequestData(
   this->NumberOfThinVoxels = 0;
   this->NumberOfMinorityCornerVoxels = 0;
   const bool built = geometry.Dimension == 3
-    ? BuildTree<3>(
-        materials, voxelDims, geometry, materialLabels, request, executor, output, report, error)
-    : BuildTree<2>(
-        materials, voxelDims, geometry, materialLabels, request, executor, output, report, error);
+    ? BuildTree<3>(materials, voxelDims, planVoxelDims, splitting ? &piece : nullptr, geometry,
+        materialLabels, request, executor, output, report, error)
+    : BuildTree<2>(materials, voxelDims, planVoxelDims, splitting ? &piece : nullptr, geometry,
+        materialLabels, request, executor, output, report, error);
   if (!report.Warning.empty())
   {
     vtkWarningMacro(<< report.Warning);

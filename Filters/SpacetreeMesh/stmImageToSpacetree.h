@@ -28,6 +28,14 @@
  * stmSpacetreeTessellate (or a file written and read back) rebuild the tree exactly.
  * Spacing, origin and direction matrix of the image are respected.
  *
+ * Pieces (pvbatch and pvserver under MPI ask for piece k of n): by default piece 0 builds the
+ * whole tree and the others are empty. With SplitIntoPieces, piece k builds the root cells of
+ * box k of n of the whole image's root grid (stm::PieceRootBox), from their voxels and those of
+ * one layer of root cells around them (the ghost layer, whose leaves get vtkGhostType
+ * DUPLICATECELL). The leaves of a piece's own box, and the cells the later stages make of them
+ * up to stmMarchingSimplices, are exactly those of the whole image, so adjacent pieces match on
+ * their shared boundary (docs/design.md, "Pieces and MPI").
+ *
  * Reference: "Image-based unstructured 3D mesh generation for medical applications",
  * section 2.1 (the specification of SpacetreeMesh).
  *
@@ -213,6 +221,18 @@ public:
   vtkBooleanMacro(UseSizingArray, bool);
   ///@}
 
+  ///@{
+  /**
+   * When the pipeline asks for piece k of n > 1, build only that piece's part of the tree (its
+   * box of root cells and a ghost layer of one root cell) instead of the whole tree on piece 0.
+   * Needs the whole image's extent from upstream; Grading is not supported with it. Default
+   * off.
+   */
+  vtkSetMacro(SplitIntoPieces, bool);
+  vtkGetMacro(SplitIntoPieces, bool);
+  vtkBooleanMacro(SplitIntoPieces, bool);
+  ///@}
+
   vtkMTimeType GetMTime() override;
 
 protected:
@@ -220,7 +240,8 @@ protected:
   ~stmImageToSpacetree() override;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
-  /// Under MPI: the whole image on piece 0, nothing on the others (stmPieces.h).
+  /// Under MPI: the whole image on piece 0, nothing on the others (stmPieces.h); with
+  /// SplitIntoPieces, the voxels of the piece's root cells and its ghost layer.
   int RequestUpdateExtent(vtkInformation* request, vtkInformationVector** inputVector,
     vtkInformationVector* outputVector) override;
   int RequestData(vtkInformation* request, vtkInformationVector** inputVector,
@@ -238,6 +259,7 @@ protected:
   double Grading = 0;
   bool UseSizingArray = false;
   int ThinPartRefinement = THIN_BODY_PARTS;
+  bool SplitIntoPieces = false;
   vtkIdType NumberOfThinVoxels = 0;
   vtkIdType NumberOfMinorityCornerVoxels = 0;
 

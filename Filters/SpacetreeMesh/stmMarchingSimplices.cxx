@@ -3,6 +3,7 @@
 
 #include "stmCutInput.h"
 #include "stmFunctionValues.h"
+#include "stmPieces.h"
 #include "stmSMPExecutor.h"
 
 #include "Cut/MarchingSimplices.h"
@@ -518,6 +519,7 @@ int stmMarchingSimplices::RequestData(
   }
   this->NumberOfSplitCells = request.SplitCells;
   this->NumberOfCutPoints = request.CutPoints;
+  stmPieces::PassPieceMarker(input, output);
   this->UpdateProgress(1.0);
   return 1;
 }

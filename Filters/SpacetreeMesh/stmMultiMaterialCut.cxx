@@ -2,6 +2,7 @@
 #include "stmMultiMaterialCut.h"
 
 #include "stmCutInput.h"
+#include "stmPieces.h"
 #include "stmPlaneFrame.h"
 #include "stmSMPExecutor.h"
 
@@ -350,6 +351,7 @@ int stmMultiMaterialCut::RequestData(
   this->NumberOfSplitAssignedCells = result.SplitAssignedCells;
   this->NumberOfCutPoints = result.CutPoints;
   this->NumberOfSnappedPoints = result.SnappedPoints;
+  stmPieces::PassPieceMarker(input, output);
   this->UpdateProgress(1.0);
   return 1;
 }

@@ -3,20 +3,27 @@
  * @brief   how the filters answer requests for pieces (pvbatch and pvserver under MPI), private
  *          to the module
  *
- * Under MPI every rank asks its pipeline for piece k of n. Meshing a piece of an image on its own
- * is wrong: each rank would mesh its slab with a boundary where the slabs meet, and the union
- * would have a seam of doubled points and facets. Until the stages exchange what they share
- * (issue 11), piece 0 meshes the whole image and the other pieces are empty: the stages that read
- * images ask for the whole image on piece 0 and for nothing on the others, and every stage gives
- * an empty input on a piece other than the first an empty output, quietly. With one piece (a
- * serial run) an empty input stays an error.
+ * Under MPI every rank asks its pipeline for piece k of n. Meshing the slabs a reader splits an
+ * image into, each on its own, is wrong: the union would have a seam of doubled points and
+ * facets where the slabs meet. So by default piece 0 meshes the whole image and the other
+ * pieces are empty: the stages that read images ask for the whole image on piece 0 and for
+ * nothing on the others, and every stage gives an empty input on such a piece an empty output,
+ * quietly. With one piece (a serial run) an empty input stays an error.
+ *
+ * With stmImageToSpacetree::SplitIntoPieces, piece k builds the root cells of box k of n
+ * (stm::PieceRootBox) from its voxels and those of one layer of ghost root cells around it;
+ * the tree and every mesh made of it carry the field array PieceMarkerName and vtkGhostType on
+ * the ghost layer's leaves and cells, and the later stages mesh such a piece like a whole image.
  */
 
 #ifndef stmPieces_h
 #define stmPieces_h
 
 #include "vtkDataSet.h"
+#include "vtkFieldData.h"
 #include "vtkInformation.h"
+#include "vtkIntArray.h"
+#include "vtkNew.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 
 #include <string>
@@ -33,15 +40,17 @@ inline int RequestedPiece(vtkInformation* info)
 }
 
 /// Asks the image on `imageInfo` (an input's information) for the whole image when
-/// `requestInfo` (the output's request) is for piece 0, and for nothing otherwise.
-inline void RequestWholeImageOnFirstPiece(vtkInformation* requestInfo, vtkInformation* imageInfo)
+/// `requestInfo` (the output's request) is for piece 0 (or for any piece with `everyPiece`),
+/// and for nothing otherwise.
+inline void RequestWholeImageOnFirstPiece(
+  vtkInformation* requestInfo, vtkInformation* imageInfo, bool everyPiece = false)
 {
   using Pipeline = vtkStreamingDemandDrivenPipeline;
   if (!imageInfo)
   {
     return;
   }
-  if (RequestedPiece(requestInfo) == 0)
+  if (everyPiece || RequestedPiece(requestInfo) == 0)
   {
     imageInfo->Set(Pipeline::UPDATE_PIECE_NUMBER(), 0);
     imageInfo->Set(Pipeline::UPDATE_NUMBER_OF_PIECES(), 1);
@@ -55,26 +64,76 @@ inline void RequestWholeImageOnFirstPiece(vtkInformation* requestInfo, vtkInform
   imageInfo->Set(Pipeline::UPDATE_EXTENT(), nothing, 6);
 }
 
+/// Asks a gray image that a stage samples at the mesh's points (SeparatingFunction,
+/// VertexSnap) for the whole image on every piece: with SplitIntoPieces every piece has points
+/// to sample, which the request cannot tell apart from a later piece of the default mode (that
+/// then reads the image without using it).
+inline void RequestWholeGrayImage(vtkInformation* requestInfo, vtkInformation* imageInfo)
+{
+  RequestWholeImageOnFirstPiece(requestInfo, imageInfo, true);
+}
+
+/// Field array of a tree or mesh that is a piece of a larger image's (SplitIntoPieces).
+constexpr const char* PieceMarkerName = "SpacetreeMeshPiece";
+
+/// The number of pieces a request asks for (1 when it names none).
+inline int RequestedNumberOfPieces(vtkInformation* info)
+{
+  using Pipeline = vtkStreamingDemandDrivenPipeline;
+  return info && info->Has(Pipeline::UPDATE_NUMBER_OF_PIECES())
+    ? info->Get(Pipeline::UPDATE_NUMBER_OF_PIECES())
+    : 1;
+}
+
+/// Marks a dataset as a piece made with SplitIntoPieces, so that the later stages mesh it
+/// although the pipeline asks for a piece other than the first (SkipsPiece).
+inline void MarkPiece(vtkFieldData* fieldData)
+{
+  vtkNew<vtkIntArray> marker;
+  marker->SetName(PieceMarkerName);
+  marker->InsertNextValue(1);
+  fieldData->AddArray(marker);
+}
+
+/// Marks `output` as a piece when `input` is one: for the stages whose output field data the
+/// executive does not pass on.
+inline void PassPieceMarker(vtkDataSet* input, vtkDataSet* output)
+{
+  if (input && output && input->GetFieldData() && input->GetFieldData()->GetArray(PieceMarkerName))
+  {
+    MarkPiece(output->GetFieldData());
+  }
+}
+
+/// Whether a dataset is a piece made with SplitIntoPieces.
+inline bool IsMarkedPiece(vtkDataSet* data)
+{
+  return data && data->GetFieldData() && data->GetFieldData()->GetArray(PieceMarkerName);
+}
+
 /// What a stage after ImageToSpacetree does with the request on `info` (its input's
-/// information) and its input: false for piece 0, which it runs as usual; true for a later piece,
-/// which gets an empty output. That is quiet when the input is empty, as ImageToSpacetree and
-/// every stage after it make it; a later piece with cells is a mesh distributed by other means,
-/// which the stages cannot mesh piece by piece yet, and `error` says so (else it stays empty).
-inline bool IsLaterPiece(vtkInformation* info, vtkDataSet* input, std::string& error)
+/// information) and its input: true when it gives an empty output, quietly when `error` stays
+/// empty. An empty input gives an empty output quietly when the request is for one of several
+/// pieces (another piece holds the mesh). A piece with cells is meshed when it is the first or
+/// a piece made with SplitIntoPieces; a later piece with cells and no marker is a mesh
+/// distributed by other means, which the stages cannot mesh piece by piece (snapping and
+/// smoothing look across the pieces' boundary), and `error` says so.
+inline bool SkipsPiece(vtkInformation* info, vtkDataSet* input, std::string& error)
 {
   const int piece = RequestedPiece(info);
-  if (piece == 0)
+  if (!input || input->GetNumberOfCells() == 0)
+  {
+    return piece > 0 || RequestedNumberOfPieces(info) > 1;
+  }
+  if (piece == 0 || IsMarkedPiece(input))
   {
     return false;
   }
-  if (input && input->GetNumberOfCells() > 0)
-  {
-    error = "piece " + std::to_string(piece) + " of the input has " +
-      std::to_string(input->GetNumberOfCells()) +
-      " cells: SpacetreeMesh does not mesh distributed data piece by piece yet; gather the mesh "
-      "on one rank first, or start the pipeline from the image (ImageToSpacetree meshes it on "
-      "the first rank)";
-  }
+  error = "piece " + std::to_string(piece) + " of the input has " +
+    std::to_string(input->GetNumberOfCells()) +
+    " cells: SpacetreeMesh meshes a distributed image piece by piece only from ImageToSpacetree "
+    "with Split Into Pieces on; gather the mesh on one rank first, or start the pipeline from "
+    "the image";
   return true;
 }
 } // namespace stmPieces

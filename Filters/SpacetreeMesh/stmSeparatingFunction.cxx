@@ -75,7 +75,7 @@ int stmSeparatingFunction::FillInputPortInformation(int port, vtkInformation* in
 int stmSeparatingFunction::ComputeInputUpdateExtent(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  stmPieces::RequestWholeImageOnFirstPiece(
+  stmPieces::RequestWholeGrayImage(
     outputVector->GetInformationObject(0), inputVector[1]->GetInformationObject(0));
   return 1;
 }
@@ -124,7 +124,7 @@ int stmSeparatingFunction::RequestData(
     return 0;
   };
   std::string pieceError;
-  if (stmPieces::IsLaterPiece(inInfo, input, pieceError))
+  if (stmPieces::SkipsPiece(inInfo, input, pieceError))
   {
     output->Initialize();
     return pieceError.empty() ? 1 : fail(pieceError);

@@ -89,7 +89,7 @@ protected:
   ~stmSeparatingFunction() override;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
-  /// Under MPI: the whole gray image on piece 0, nothing on the others (stmPieces.h).
+  /// Under MPI: the whole gray image on every piece (stmPieces::RequestWholeGrayImage).
   int ComputeInputUpdateExtent(vtkInformation* request, vtkInformationVector** inputVector,
     vtkInformationVector* outputVector) override;
   int RequestData(vtkInformation* request, vtkInformationVector** inputVector,

@@ -9,6 +9,7 @@
 #include "vtkAlgorithm.h"
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
+#include "vtkDataSetAttributes.h"
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
 #include "vtkIdTypeArray.h"
@@ -44,6 +45,8 @@ constexpr const char* OriginName = "SpacetreeLatticeOrigin";
 constexpr const char* AxisVectorsName = "SpacetreeLatticeAxes";
 constexpr const char* CellSizesName = "SpacetreeCellSizes";
 constexpr const char* VoxelSubdivisionName = "SpacetreeVoxelSubdivision";
+constexpr const char* OwnedRootsName = "SpacetreeOwnedRoots";
+constexpr const char* LatticeOffsetName = "SpacetreeLatticeOffset";
 
 void AddIntArray(vtkFieldData* fd, const char* name, const std::vector<int>& values)
 {
@@ -170,6 +173,28 @@ bool ReadGeometry(vtkFieldData* fd, stmSpacetreeGeometry& geometry, std::string&
     error = "the spacetree's lattice axes are degenerate (zero or parallel voxel edges)";
     return false;
   }
+  geometry.IsPiece = fd->GetArray(OwnedRootsName) != nullptr;
+  if (geometry.IsPiece)
+  {
+    if (!GetDoubles(fd, LatticeOffsetName, geometry.Dimension, geometry.LatticeOffset, error))
+    {
+      return false;
+    }
+    if (!GetInts(fd, OwnedRootsName, 2 * geometry.Dimension, ints, error))
+    {
+      return false;
+    }
+    for (int i = 0; i < geometry.Dimension; ++i)
+    {
+      geometry.OwnedRootLower[i] = ints[i];
+      geometry.OwnedRootUpper[i] = ints[geometry.Dimension + i];
+      if (ints[i] < 0 || ints[geometry.Dimension + i] <= ints[i])
+      {
+        error = "the spacetree's owned root cells are an empty box";
+        return false;
+      }
+    }
+  }
   return true;
 }
 
@@ -192,11 +217,11 @@ bool BeginRequest(vtkAlgorithm* filter, vtkInformationVector* inputPort,
     requestResult = 1;
     return false;
   }
-  if (stmPieces::IsLaterPiece(info, input, error))
+  if (stmPieces::SkipsPiece(info, input, error))
   {
     if (error.empty())
     {
-      output->Initialize(); // piece 0 has the whole spacetree
+      output->Initialize(); // another piece holds the spacetree
       requestResult = 1;
       return false;
     }
@@ -234,9 +259,10 @@ int EndRequest(
 
 void RemoveSpacetreeFieldData(vtkFieldData* fieldData)
 {
-  for (const char* name : { DimensionName, ImageAxesName, RootGridName, MaxLevelName,
-         ImageDimensionsName, BackgroundLabelName, BodyLabelsName, BalanceLevelName,
-         FaceBalanceOnlyName, OriginName, AxisVectorsName, CellSizesName, VoxelSubdivisionName })
+  for (const char* name :
+    { DimensionName, ImageAxesName, RootGridName, MaxLevelName, ImageDimensionsName,
+      BackgroundLabelName, BodyLabelsName, BalanceLevelName, FaceBalanceOnlyName, OriginName,
+      AxisVectorsName, CellSizesName, VoxelSubdivisionName, OwnedRootsName, LatticeOffsetName })
   {
     fieldData->RemoveArray(name);
   }
@@ -306,6 +332,32 @@ bool ReadLeaves(vtkDataArray* levels, vtkDataArray* materials, vtkDataArray* ind
   return true;
 }
 } // namespace
+
+template <int Dim>
+std::vector<std::uint8_t> GhostLeafFlags(
+  const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry)
+{
+  std::vector<std::uint8_t> ghosts(static_cast<std::size_t>(tree.GetNumberOfLeaves()), 0);
+  if (!geometry.IsPiece)
+  {
+    return ghosts;
+  }
+  const stm::LatticeIndex<Dim>& rootSize = tree.GetRootCellSize();
+  vtkSMPTools::For(0, tree.GetNumberOfLeaves(), 8192,
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      for (vtkIdType leaf = begin; leaf < end; ++leaf)
+      {
+        long long root[3] = { 0, 0, 0 };
+        for (int axis = 0; axis < Dim; ++axis)
+        {
+          root[axis] = tree.LeafAnchors[leaf][axis] / rootSize[axis];
+        }
+        ghosts[leaf] = geometry.OwnsRoot(root) ? 0 : vtkDataSetAttributes::DUPLICATECELL;
+      }
+    });
+  return ghosts;
+}
 
 template <int Dim>
 bool ReadSpacetree(vtkUnstructuredGrid* input, stm::Spacetree<Dim>& tree, std::string& error)
@@ -584,8 +636,30 @@ void WriteSpacetree(const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry&
     vectors[i] = geometry.AxisVectors[i / 3][i % 3];
   }
   AddDoubleArray(fd, AxisVectorsName, vectors, 9);
+  if (geometry.IsPiece)
+  {
+    std::vector<int> owned(2 * Dim);
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      owned[axis] = static_cast<int>(geometry.OwnedRootLower[axis]);
+      owned[Dim + axis] = static_cast<int>(geometry.OwnedRootUpper[axis]);
+    }
+    AddIntArray(fd, OwnedRootsName, owned);
+    AddDoubleArray(fd, LatticeOffsetName, geometry.LatticeOffset, Dim);
+    stmPieces::MarkPiece(fd);
+    std::vector<std::uint8_t> flags = GhostLeafFlags<Dim>(tree, geometry);
+    vtkNew<vtkUnsignedCharArray> ghosts;
+    ghosts->SetName(vtkDataSetAttributes::GhostArrayName());
+    ghosts->SetNumberOfValues(leaves);
+    std::copy(flags.begin(), flags.end(), ghosts->GetPointer(0));
+    output->GetCellData()->AddArray(ghosts);
+  }
 }
 
+template std::vector<std::uint8_t> GhostLeafFlags<2>(
+  const stm::Spacetree<2>&, const stmSpacetreeGeometry&);
+template std::vector<std::uint8_t> GhostLeafFlags<3>(
+  const stm::Spacetree<3>&, const stmSpacetreeGeometry&);
 template bool ReadSpacetree<2>(vtkUnstructuredGrid*, stm::Spacetree<2>&, std::string&);
 template bool ReadSpacetree<3>(vtkUnstructuredGrid*, stm::Spacetree<3>&, std::string&);
 template void WriteSpacetree<2>(

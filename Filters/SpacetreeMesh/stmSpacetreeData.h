@@ -14,7 +14,9 @@
 
 #include "Spacetree/Spacetree.h"
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 class vtkAlgorithm;
 class vtkFieldData;
@@ -33,8 +35,33 @@ struct stmSpacetreeGeometry
   /// Physical vector of one lattice unit along each image axis (a voxel edge, or a fraction of
   /// it where cells are refined below the voxel).
   double AxisVectors[3][3] = { { 1, 0, 0 }, { 0, 1, 0 }, { 0, 0, 1 } };
+  /// A piece of a larger image (stmImageToSpacetree::SplitIntoPieces): the root cells
+  /// [OwnedRootLower, OwnedRootUpper) of this tree (per spacetree axis) are the piece's own;
+  /// the others are its ghost layer, whose leaves and cells carry vtkGhostType DUPLICATECELL.
+  bool IsPiece = false;
+  long long OwnedRootLower[3] = { 0, 0, 0 };
+  long long OwnedRootUpper[3] = { 0, 0, 0 };
 
-  /// x = Origin + sum_i lattice[i] * AxisVectors[ImageAxes[i]], for Dimension coordinates.
+  /// Whether a root cell (per spacetree axis) is the piece's own; always for a whole image.
+  bool OwnsRoot(const long long* root) const
+  {
+    for (int i = 0; i < this->Dimension && this->IsPiece; ++i)
+    {
+      if (root[i] < this->OwnedRootLower[i] || root[i] >= this->OwnedRootUpper[i])
+      {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  /// Lattice units from Origin to the tree's lattice point 0 per spacetree axis: 0 for a whole
+  /// image; for a piece, where its first voxel lies in the whole image, so that its points are
+  /// computed as the whole image's are, bit for bit.
+  double LatticeOffset[3] = { 0, 0, 0 };
+
+  /// x = Origin + sum_i (LatticeOffset[i] + lattice[i]) * AxisVectors[ImageAxes[i]], for
+  /// Dimension coordinates.
   void ToPhysical(const double* lattice, double x[3]) const
   {
     for (int c = 0; c < 3; ++c)
@@ -44,9 +71,10 @@ struct stmSpacetreeGeometry
     for (int i = 0; i < this->Dimension; ++i)
     {
       const double* axis = this->AxisVectors[this->ImageAxes[i]];
+      const double position = this->LatticeOffset[i] + lattice[i];
       for (int c = 0; c < 3; ++c)
       {
-        x[c] += lattice[i] * axis[c];
+        x[c] += position * axis[c];
       }
     }
   }
@@ -66,14 +94,22 @@ bool BeginRequest(vtkAlgorithm* filter, vtkInformationVector* inputPort,
 int EndRequest(
   vtkAlgorithm* filter, bool succeeded, const std::string& error, vtkUnstructuredGrid* output);
 
-/// Removes the spacetree's field arrays (a mesh is not a spacetree).
+/// Removes the spacetree's field arrays (a mesh is not a spacetree), except the marker of a
+/// piece (MarkPiece), which the mesh keeps.
 void RemoveSpacetreeFieldData(vtkFieldData* fieldData);
 
 /// Rebuilds the core spacetree; false with a message if anything is missing or inconsistent.
 template <int Dim>
 bool ReadSpacetree(vtkUnstructuredGrid* input, stm::Spacetree<Dim>& tree, std::string& error);
 
-/// Writes the spacetree and its geometry into an (empty) unstructured grid.
+/// Per leaf, vtkDataSetAttributes::DUPLICATECELL where its root cell is not the piece's own
+/// (stmSpacetreeGeometry::IsPiece), else 0.
+template <int Dim>
+std::vector<std::uint8_t> GhostLeafFlags(
+  const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry);
+
+/// Writes the spacetree and its geometry into an (empty) unstructured grid; a piece's tree also
+/// gets its owned root cells, the piece marker and vtkGhostType on the ghost leaves.
 template <int Dim>
 void WriteSpacetree(const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry,
   vtkUnstructuredGrid* output);

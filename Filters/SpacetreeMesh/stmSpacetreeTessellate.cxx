@@ -10,6 +10,7 @@
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkCellType.h"
+#include "vtkDataSetAttributes.h"
 #include "vtkDoubleArray.h"
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
@@ -430,6 +431,27 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   output->SetCells(types, cellArray);
   output->GetCellData()->AddArray(materials);
   output->GetCellData()->SetActiveScalars("Material");
+  if (geometry.IsPiece)
+  {
+    // A cell is a ghost where its leaf is.
+    const std::vector<std::uint8_t> ghostLeaves =
+      stmSpacetreeData::GhostLeafFlags<Dim>(tree, geometry);
+    const std::vector<std::int64_t>& leafCells = tessellator.GetLeafCellOffsets();
+    vtkNew<vtkUnsignedCharArray> ghosts;
+    ghosts->SetName(vtkDataSetAttributes::GhostArrayName());
+    ghosts->SetNumberOfValues(cells);
+    unsigned char* ghostValues = ghosts->GetPointer(0);
+    vtkSMPTools::For(0, tree.GetNumberOfLeaves(),
+      [&](vtkIdType begin, vtkIdType end)
+      {
+        for (vtkIdType leaf = begin; leaf < end; ++leaf)
+        {
+          std::fill(
+            ghostValues + leafCells[leaf], ghostValues + leafCells[leaf + 1], ghostLeaves[leaf]);
+        }
+      });
+    output->GetCellData()->AddArray(ghosts);
+  }
   if (hangingNodes)
   {
     output->GetPointData()->AddArray(hangingNodes);

@@ -184,7 +184,7 @@ protected:
   ~stmVertexSnap() override;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
-  /// Under MPI: the whole gray image on piece 0, nothing on the others (stmPieces.h).
+  /// Under MPI: the whole gray image on every piece (stmPieces::RequestWholeGrayImage).
   int RequestUpdateExtent(vtkInformation* request, vtkInformationVector** inputVector,
     vtkInformationVector* outputVector) override;
   int RequestData(vtkInformation* request, vtkInformationVector** inputVector,

@@ -92,6 +92,7 @@ for name, gray in (("labels", None), ("gray", gray_vti)):
     stages[-1].Update()
     references[name] = stages[-1].GetOutput()
     T.check(references[name].GetNumberOfCells() > 1000, "the serial %s mesh" % name)
+    references[name + " cut"] = stages[-2].GetOutput()  # MarchingSimplices'
 
 if ranks == 1:
     # VTK-style: every stage asked for piece 1 of 2 gives an empty output without an error; the
@@ -113,10 +114,20 @@ if ranks == 1:
     snap.SetInputData(references["labels"])
     collector = T.ErrorCollector(snap)
     snap.UpdatePiece(1, 2, 0)
-    T.check(any("does not mesh distributed data piece by piece" in e for e in collector.errors),
+    T.check(any("piece by piece only from ImageToSpacetree" in e for e in collector.errors),
             "a later piece with cells: %r" % collector.errors)
     T.check_equal(snap.GetOutput().GetNumberOfCells(), 0, "the refused piece's cells")
 else:
+    def update_without_errors(stages, what):
+        """Updates the proxies' pipeline; their VTK objects, which must report no error."""
+        objects = [stage.GetClientSideObject() for stage in stages]
+        collectors = [T.ErrorCollector(obj) for obj in objects]
+        stages[-1].UpdatePipeline()
+        for obj, collector in zip(objects, collectors):
+            T.check(not collector.errors, "rank %d, %s: %s: %r" % (
+                rank, what, obj.GetClassName(), collector.errors))
+        return objects
+
     # Under MPI: the readers that split (.vti) and those that cannot (NIfTI), and a gray image
     # read in pieces as the separating function's second input.
     chains = {
@@ -135,12 +146,7 @@ else:
         stages.append(VertexSnap(Input=stages[-1]))  # noqa: F821
         stages.append(MarchingSimplices(Input=stages[-1]))  # noqa: F821
         stages.append(BoundarySmooth(Input=stages[-1]))  # noqa: F821
-        objects = [stage.GetClientSideObject() for stage in stages]
-        collectors = [T.ErrorCollector(obj) for obj in objects]
-        stages[-1].UpdatePipeline()
-        for obj, collector in zip(objects, collectors):
-            T.check(not collector.errors, "rank %d, %s: %s: %r" % (
-                rank, name, obj.GetClassName(), collector.errors))
+        objects = update_without_errors(stages, name)
         mesh = objects[-1].GetOutputDataObject(0)
         if rank == 0:
             check_same_mesh(mesh, references[reference], "%s, rank 0 of %d" % (name, ranks))
@@ -153,4 +159,29 @@ else:
         controller.AllReduce(local, total, 2)  # vtkCommunicator.SUM_OP
         T.check_equal(total.GetValue(0), references[reference].GetNumberOfCells(),
                       "%s: cells over the %d ranks" % (name, ranks))
+    # Split Into Pieces: every rank meshes its own root cells and a ghost layer; the cells the
+    # ranks own are the serial mesh's (TestSplitPieces.py compares them point for point), and
+    # smoothing keeps them (it holds the ghost cells' points).
+    from vtkmodules.vtkCommonCore import vtkIdTypeArray
+    from vtkmodules.vtkCommonDataModel import vtkDataSetAttributes
+    for name, source in (("vti", simple.XMLImageDataReader(FileName=[labels_vti])),
+                         ("nifti", NIfTIReaderSpacetreeMesh(FileName=labels_nii))):  # noqa: F821
+        stages = [ImageToSpacetree(Input=source, SplitIntoPieces=1)]  # noqa: F821
+        for make in (SpacetreeBalance, SpacetreeTessellate, VertexSnap,  # noqa: F821
+                     MarchingSimplices, BoundarySmooth):  # noqa: F821
+            stages.append(make(Input=stages[-1]))
+        objects = update_without_errors(stages, "split " + name)
+        for index, what in ((-2, "cut"), (-1, "smoothed")):
+            mesh = objects[index].GetOutputDataObject(0)
+            ghosts = vtk_to_numpy(
+                mesh.GetCellData().GetArray(vtkDataSetAttributes.GhostArrayName()))
+            owned = int((ghosts == 0).sum())
+            T.check(0 < owned < mesh.GetNumberOfCells(),
+                    "rank %d, split %s, %s: %d owned of %d cells" % (
+                        rank, name, what, owned, mesh.GetNumberOfCells()))
+            local, total = vtkIdTypeArray(), vtkIdTypeArray()
+            local.InsertNextValue(owned)
+            controller.AllReduce(local, total, 2)  # vtkCommunicator.SUM_OP
+            T.check_equal(total.GetValue(0), references["labels cut"].GetNumberOfCells(),
+                          "split %s, %s: owned cells over the %d ranks" % (name, what, ranks))
 print("rank %d of %d: pieces ok" % (rank, ranks))

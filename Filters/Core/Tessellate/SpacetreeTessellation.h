@@ -443,6 +443,8 @@ public:
   }
 
   std::int64_t GetNumberOfCells() const { return this->CellOffsets.back(); }
+  /// The cells of leaf l are [offsets[l], offsets[l + 1]) in WriteCells' order.
+  const std::vector<std::int64_t>& GetLeafCellOffsets() const { return this->CellOffsets; }
   /// Total number of point ids over all cells.
   std::int64_t GetConnectivitySize() const { return this->ConnectivityOffsets.back(); }
   std::int64_t GetNumberOfPoints() const { return this->NumberOfPoints; }

@@ -1,0 +1,183 @@
+"""ImageToSpacetree's Split Into Pieces (run by pvpython): piece k of n builds the root cells of
+its box and one ghost layer of root cells, and the stages up to MarchingSimplices (or
+MultiMaterialCut) mesh it. The
+cells each piece owns (vtkGhostType 0) are exactly the serial mesh's cells there, so adjacent
+pieces share their boundary's points and facets, and the pieces together are the serial mesh:
+2D and 3D, several labels, balance levels 1 and 2, 2, 3 and 5 pieces, point and cell labels.
+BoundarySmooth holds the points of a piece's ghost cells: the smoothed pieces still match (the
+owned cells together have the serial mesh's cells and boundary facets, by coordinates), and
+differ from the serial mesh only near where they meet.
+"""
+import numpy as np
+
+import spacetreemesh
+import stmtesting as T
+from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkCommonDataModel import vtkDataSetAttributes
+from vtkmodules.vtkCommonExecutionModel import vtkTrivialProducer
+
+
+def ellipsoids(shape):
+    """Nested ellipsoids (labels 1..3) in a [z, y, x] array, and a one-voxel layer of label 4."""
+    z, y, x = np.meshgrid(*[np.arange(n) + 0.5 for n in shape], indexing="ij")
+    centre = [n / 2.0 for n in shape]
+    r = np.sqrt(sum(((c - m) / (0.45 * n)) ** 2 for c, m, n in zip((z, y, x), centre, shape)))
+    labels = np.zeros(shape, dtype=np.uint8)
+    labels[r < 1.0] = 1
+    labels[r < 0.7] = 2
+    labels[r < 0.4] = 3
+    labels[(r >= 0.55) & (r < 0.55 + 1.0 / max(shape))] = 4
+    return labels
+
+
+def chain(image, balance_level, cut, smooth=False, gray=None):
+    producer = vtkTrivialProducer()  # hands out the whole image for any extent: the filter crops
+    producer.SetOutput(image)
+    tree, balance, tessellate = T.spacetree_chain(producer)
+    tree.SetSplitIntoPieces(True)
+    balance.SetBalanceLevel(balance_level)
+    stages = [tree, balance, tessellate]
+    if gray is not None:
+        gray_producer = vtkTrivialProducer()
+        gray_producer.SetOutput(gray)
+        function = spacetreemesh.stmSeparatingFunction()
+        function.SetInputConnection(tessellate.GetOutputPort())
+        function.SetGrayImageConnection(gray_producer.GetOutputPort())
+        function.SetMode(spacetreemesh.stmSeparatingFunction.GRAY_IMAGE)
+        function.SetThreshold(0.5)
+        stages.append(function)
+    if cut == "materials":
+        tree.SetThinPartRefinement(spacetreemesh.stmImageToSpacetree.THIN_MATERIAL_PARTS)
+        stage = spacetreemesh.stmMultiMaterialCut()
+        stage.SetInputConnection(stages[-1].GetOutputPort())
+        stages.append(stage)
+    elif cut:
+        for cls in (spacetreemesh.stmVertexSnap, spacetreemesh.stmMarchingSimplices):
+            stage = cls()
+            stage.SetInputConnection(stages[-1].GetOutputPort())
+            stages.append(stage)
+    if smooth:
+        stage = spacetreemesh.stmBoundarySmooth()
+        stage.SetInputConnection(stages[-1].GetOutputPort())
+        stage.SetSplitInteriorEdges(False)  # pieces do not split edges: compare like with like
+        stages.append(stage)
+    return stages
+
+
+def cells(mesh, nodes):
+    """The cells with vtkGhostType 0, as sorted rows of their points' coordinates and material."""
+    if mesh.GetNumberOfCells() == 0:
+        return np.zeros((0, 3 * nodes + 1))
+    points = T.points(mesh)
+    conn = T.connectivity(mesh, nodes)
+    ghosts = mesh.GetCellData().GetArray(vtkDataSetAttributes.GhostArrayName())
+    own = np.ones(len(conn), dtype=bool) if ghosts is None else vtk_to_numpy(ghosts) == 0
+    corners = points[conn[own]]  # (m, nodes, 3)
+    order = np.lexsort((corners[:, :, 2], corners[:, :, 1], corners[:, :, 0]), axis=1)
+    corners = np.take_along_axis(corners, order[:, :, None], axis=1).reshape(len(corners), -1)
+    rows = np.column_stack([corners, T.cell_array(mesh, "Material")[own]])
+    return rows[np.lexsort(rows.T[::-1])]
+
+
+def check_pieces(labels, dimension, cell_data, balance_level, cut, what, gray=None):
+    image = T.make_image(labels, cell_data=cell_data)
+    nodes = dimension + 1
+    serial = chain(image, balance_level, cut, gray=gray)
+    serial[-1].Update()
+    reference = serial[-1].GetOutput()
+    T.check(reference.GetCellData().GetArray(vtkDataSetAttributes.GhostArrayName()) is None,
+            what + ": a serial mesh has ghost cells")
+    expected = cells(reference, nodes)
+    T.check(len(expected) > 500, what + ": the serial mesh has %d cells" % len(expected))
+    for pieces in (2, 3, 5):
+        together = []
+        for piece in range(pieces):
+            stages = chain(image, balance_level, cut, gray=gray)
+            T.check(stages[-1].UpdatePiece(piece, pieces, 0) == 1,
+                    "%s: piece %d of %d failed" % (what, piece, pieces))
+            mesh = stages[-1].GetOutput()
+            ghosts = mesh.GetCellData().GetArray(vtkDataSetAttributes.GhostArrayName())
+            flags = vtk_to_numpy(ghosts) if ghosts is not None else np.zeros(0)
+            T.check(0 < np.count_nonzero(flags) < mesh.GetNumberOfCells(),
+                    "%s: piece %d of %d: %d ghost cells of %d" % (
+                        what, piece, pieces, np.count_nonzero(flags), mesh.GetNumberOfCells()))
+            T.check(mesh.GetFieldData().GetArray("SpacetreeMeshPiece") is not None,
+                    "%s: piece %d of %d is not marked" % (what, piece, pieces))
+            own = cells(mesh, nodes)
+            T.check(len(own) > 0, "%s: piece %d of %d owns no cell" % (what, piece, pieces))
+            together.append(own)
+        together = np.concatenate(together)
+        together = together[np.lexsort(together.T[::-1])]
+        T.check(together.shape == expected.shape,
+                "%s, %d pieces: %d cells owned in all, the serial mesh has %d"
+                % (what, pieces, len(together), len(expected)))
+        T.check(np.array_equal(together, expected),
+                "%s, %d pieces: the owned cells are not the serial mesh's" % (what, pieces))
+
+
+def facet_counts(rows, nodes):
+    """How many of the cells (rows of cells()) hold each facet, facets keyed by coordinates."""
+    corners = rows[:, :-1].reshape(len(rows), nodes, 3)
+    keys = []
+    for skip in range(nodes):
+        facet = np.delete(corners, skip, axis=1)  # still sorted
+        keys.append(facet.reshape(len(rows), -1))
+    keys = np.concatenate(keys)
+    _, counts = np.unique(keys, axis=0, return_counts=True)
+    return counts
+
+
+def check_smoothed_pieces(labels, dimension, pieces, what):
+    image = T.make_image(labels)
+    nodes = dimension + 1
+    serial = chain(image, 1, True, smooth=True)
+    serial[-1].Update()
+    reference = cells(serial[-1].GetOutput(), nodes)
+    together = []
+    moved_near_seam = 0
+    for piece in range(pieces):
+        stages = chain(image, 1, True, smooth=True)
+        stages[-1].UpdatePiece(piece, pieces, 0)
+        mesh = stages[-1].GetOutput()
+        T.check(mesh.GetFieldData().GetArray("SpacetreeMeshPiece") is not None,
+                "%s: smoothed piece %d is not marked" % (what, piece))
+        displacement = vtk_to_numpy(mesh.GetPointData().GetArray("SmoothingDisplacement"))
+        T.check(np.abs(displacement).max() > 0.05, "%s: piece %d was not smoothed" % (what, piece))
+        together.append(cells(mesh, nodes))
+    together = np.concatenate(together)
+    T.check(len(together) == len(reference),
+            "%s: %d owned cells, the serial mesh has %d" % (what, len(together), len(reference)))
+    counts, expected = facet_counts(together, nodes), facet_counts(reference, nodes)
+    T.check(counts.max() == 2, "%s: a facet of the pieces has %d cells" % (what, counts.max()))
+    T.check((counts == 1).sum() == (expected == 1).sum(),
+            "%s: the smoothed pieces have %d boundary facets, the serial mesh %d: they do not "
+            "match where they meet" % (what, (counts == 1).sum(), (expected == 1).sum()))
+    T.check(not np.array_equal(together[np.lexsort(together.T[::-1])], reference),
+            "%s: the smoothed pieces equal the serial mesh (no seam held?)" % what)
+
+
+three_d = ellipsoids((30, 41, 47))
+check_pieces(three_d, 3, False, 1, True, "3D to MarchingSimplices")
+check_pieces(three_d, 3, True, 2, True, "3D cell labels, L 2, to MarchingSimplices")
+check_pieces(three_d, 3, False, 1, False, "3D tessellation")
+check_pieces(three_d, 3, False, 1, "materials", "3D to MultiMaterialCut")
+# A gray image (0.9 in the body, 0.1 outside) as the separating function, sampled at every
+# piece's points: each piece reads the whole gray image.
+gray = T.make_image(np.where(three_d > 0, 1.0, 0.0).astype(np.float32) * 0.8 + 0.1, name="gray")
+check_pieces(three_d, 3, False, 1, True, "3D gray image to MarchingSimplices", gray=gray)
+two_d = ellipsoids((1, 83, 97))
+check_pieces(two_d, 2, False, 1, True, "2D to MarchingSimplices")
+check_pieces(two_d, 2, False, 1, "materials", "2D to MultiMaterialCut")
+
+check_smoothed_pieces(three_d, 3, 3, "3D smoothed")
+check_smoothed_pieces(two_d, 2, 2, "2D smoothed")
+
+# Grading reaches beyond the ghost layer: refused.
+stages = chain(T.make_image(three_d), 1, False)
+stages[0].SetGrading(2.0)
+observer = T.ErrorCollector(stages[0])
+stages[-1].UpdatePiece(0, 2, 0)
+T.check(any("Grading is not supported" in m for m in observer.errors),
+        "Grading with Split Into Pieces: %r" % observer.errors)
+observer.remove()
+print("split pieces: OK")
