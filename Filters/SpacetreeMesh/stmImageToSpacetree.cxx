@@ -824,6 +824,23 @@ int stmImageToSpacetree::RequestData(
     vtkErrorMacro("ImageToSpacetree needs a vtkImageData input.");
     return 0;
   }
+  PieceLayout piece;
+  if (splitting)
+  {
+    // As RequestUpdateExtent laid it out; a piece without root cells got no voxels.
+    std::string error;
+    if (!LayOutRequestedPiece(this, outInfo, inputVector[0]->GetInformationObject(0),
+          LabelsAreCellData(this), input->GetDirectionMatrix()->GetData(), piece, error))
+    {
+      vtkErrorMacro("ImageToSpacetree failed: " << error);
+      return 0;
+    }
+    if (piece.Empty)
+    {
+      output->Initialize(); // more pieces than root cells
+      return 1;
+    }
+  }
 
   // The label array.
   int association = -1;
@@ -927,9 +944,9 @@ int stmImageToSpacetree::RequestData(
   // (LatticeOffset), so that its points are the whole image's, bit for bit.
   int extent[6];
   input->GetExtent(extent);
-  PieceLayout piece;
   if (splitting)
   {
+    // Again with the label array's association as it turned out.
     std::string error;
     if (!LayOutRequestedPiece(this, outInfo, inputVector[0]->GetInformationObject(0), cellLabels,
           direction, piece, error))
@@ -937,25 +954,22 @@ int stmImageToSpacetree::RequestData(
       vtkErrorMacro("ImageToSpacetree failed: " << error);
       return 0;
     }
-    if (piece.Empty)
-    {
-      output->Initialize(); // more pieces than root cells
-      return 1;
-    }
-    for (int i = 0; i < geometry.Dimension; ++i)
+    bool covered = !piece.Empty && piece.Dimension == geometry.Dimension;
+    for (int i = 0; i < geometry.Dimension && covered; ++i)
     {
       const int axis = geometry.ImageAxes[i];
       const long long first = extent[2 * axis] - piece.WholeExtent[2 * axis];
-      if (piece.ImageAxes[i] != axis || first > piece.FirstVoxel[i] ||
-        first + voxelDims[axis] < piece.FirstVoxel[i] + piece.VoxelCount[i])
-      {
-        vtkErrorMacro("ImageToSpacetree failed: the image's extent ("
-          << extent[0] << " " << extent[1] << " " << extent[2] << " " << extent[3] << " "
-          << extent[4] << " " << extent[5] << ") does not hold the voxels of piece "
-          << stmPieces::RequestedPiece(outInfo) << " and its ghost layer.");
-        return 0;
-      }
+      covered = piece.ImageAxes[i] == axis && first <= piece.FirstVoxel[i] &&
+        first + voxelDims[axis] >= piece.FirstVoxel[i] + piece.VoxelCount[i];
       geometry.LatticeOffset[i] = static_cast<double>(first);
+    }
+    if (!covered)
+    {
+      vtkErrorMacro("ImageToSpacetree failed: the image's extent ("
+        << extent[0] << " " << extent[1] << " " << extent[2] << " " << extent[3] << " " << extent[4]
+        << " " << extent[5] << ") does not hold the voxels of piece "
+        << stmPieces::RequestedPiece(outInfo) << " and its ghost layer.");
+      return 0;
     }
   }
   for (int axis = 0; axis < 3; ++axis)

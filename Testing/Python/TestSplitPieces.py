@@ -72,6 +72,8 @@ def cells(mesh, nodes):
     conn = T.connectivity(mesh, nodes)
     ghosts = mesh.GetCellData().GetArray(vtkDataSetAttributes.GhostArrayName())
     own = np.ones(len(conn), dtype=bool) if ghosts is None else vtk_to_numpy(ghosts) == 0
+    if not own.any():
+        return np.zeros((0, 3 * nodes + 1))
     corners = points[conn[own]]  # (m, nodes, 3)
     order = np.lexsort((corners[:, :, 2], corners[:, :, 1], corners[:, :, 0]), axis=1)
     corners = np.take_along_axis(corners, order[:, :, None], axis=1).reshape(len(corners), -1)
@@ -79,7 +81,8 @@ def cells(mesh, nodes):
     return rows[np.lexsort(rows.T[::-1])]
 
 
-def check_pieces(labels, dimension, cell_data, balance_level, cut, what, gray=None):
+def check_pieces(labels, dimension, cell_data, balance_level, cut, what, gray=None,
+                 piece_counts=(2, 3, 5)):
     image = T.make_image(labels, cell_data=cell_data)
     nodes = dimension + 1
     serial = chain(image, balance_level, cut, gray=gray)
@@ -89,13 +92,20 @@ def check_pieces(labels, dimension, cell_data, balance_level, cut, what, gray=No
             what + ": a serial mesh has ghost cells")
     expected = cells(reference, nodes)
     T.check(len(expected) > 500, what + ": the serial mesh has %d cells" % len(expected))
-    for pieces in (2, 3, 5):
+    for pieces in piece_counts:
         together = []
         for piece in range(pieces):
             stages = chain(image, balance_level, cut, gray=gray)
+            collectors = [T.ErrorCollector(stage) for stage in stages]
             T.check(stages[-1].UpdatePiece(piece, pieces, 0) == 1,
                     "%s: piece %d of %d failed" % (what, piece, pieces))
+            T.check(not any(c.errors for c in collectors), "%s: piece %d of %d: %r" % (
+                what, piece, pieces, [c.errors for c in collectors]))
             mesh = stages[-1].GetOutput()
+            if pieces > 8:
+                # More pieces than root cells: some are empty, some own only background.
+                together.append(cells(mesh, nodes))
+                continue
             ghosts = mesh.GetCellData().GetArray(vtkDataSetAttributes.GhostArrayName())
             flags = vtk_to_numpy(ghosts) if ghosts is not None else np.zeros(0)
             T.check(0 < np.count_nonzero(flags) < mesh.GetNumberOfCells(),
@@ -161,6 +171,9 @@ check_pieces(three_d, 3, False, 1, True, "3D to MarchingSimplices")
 check_pieces(three_d, 3, True, 2, True, "3D cell labels, L 2, to MarchingSimplices")
 check_pieces(three_d, 3, False, 1, False, "3D tessellation")
 check_pieces(three_d, 3, False, 1, "materials", "3D to MultiMaterialCut")
+# 2 x 2 x 2 root cells and 10 pieces: two pieces are empty, quietly, and the others together
+# are still the serial mesh.
+check_pieces(ellipsoids((20, 20, 20)), 3, False, 1, True, "8 root cells", piece_counts=(10,))
 # A gray image (0.9 in the body, 0.1 outside) as the separating function, sampled at every
 # piece's points: each piece reads the whole gray image.
 gray = T.make_image(np.where(three_d > 0, 1.0, 0.0).astype(np.float32) * 0.8 + 0.1, name="gray")
