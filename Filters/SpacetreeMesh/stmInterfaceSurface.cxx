@@ -2,6 +2,7 @@
 #include "stmInterfaceSurface.h"
 
 #include "stmCutInput.h"
+#include "stmPieces.h"
 #include "stmPlaneFrame.h"
 #include "stmSMPExecutor.h"
 
@@ -10,6 +11,7 @@
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkDataArray.h"
+#include "vtkDataSetAttributes.h"
 #include "vtkIdTypeArray.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
@@ -22,6 +24,7 @@
 #include "vtkSMPTools.h"
 #include "vtkTypeInt32Array.h"
 #include "vtkTypeInt64Array.h"
+#include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 
 #include <limits>
@@ -122,6 +125,21 @@ stm::Status Extract(stmInterfaceSurface* filter, vtkUnstructuredGrid* input,
   }
   output->GetCellData()->AddArray(labels);
   output->GetCellData()->AddArray(cellIds);
+  // A piece (SplitIntoPieces): a facet is a ghost where the cell it was taken from is, so that
+  // every facet is owned by exactly one piece (the facets at the ghost layer's outer end too).
+  if (auto* ghosts = vtkUnsignedCharArray::SafeDownCast(
+        input->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName())))
+  {
+    vtkNew<vtkUnsignedCharArray> facetGhosts;
+    facetGhosts->SetName(vtkDataSetAttributes::GhostArrayName());
+    facetGhosts->SetNumberOfValues(count);
+    for (vtkIdType f = 0; f < count; ++f)
+    {
+      facetGhosts->SetValue(f, ghosts->GetValue(static_cast<vtkIdType>(facets.Cells[f])));
+    }
+    output->GetCellData()->AddArray(facetGhosts);
+  }
+  stmPieces::PassPieceMarker(input, output);
   return stm::Status::Ok();
 }
 } // namespace

@@ -51,6 +51,13 @@ def chain(image, balance_level, cut, smooth=False, gray=None):
         stage = spacetreemesh.stmMultiMaterialCut()
         stage.SetInputConnection(stages[-1].GetOutputPort())
         stages.append(stage)
+    elif cut == "surface":
+        tree.SetThinPartRefinement(spacetreemesh.stmImageToSpacetree.THIN_MATERIAL_PARTS)
+        for cls in (spacetreemesh.stmMultiMaterialCut, spacetreemesh.stmInterfaceSurface):
+            stage = cls()
+            stage.SetInputConnection(stages[-1].GetOutputPort())
+            stages.append(stage)
+        stages[-1].SetIncludeOuterBoundary(True)
     elif cut:
         for cls in (spacetreemesh.stmVertexSnap, spacetreemesh.stmMarchingSimplices):
             stage = cls()
@@ -69,7 +76,11 @@ def cells(mesh, nodes):
     if mesh.GetNumberOfCells() == 0:
         return np.zeros((0, 3 * nodes + 1))
     points = T.points(mesh)
-    conn = T.connectivity(mesh, nodes)
+    if mesh.IsA("vtkPolyData"):  # InterfaceSurface's facets
+        cellsOf = mesh.GetPolys() if nodes == 3 else mesh.GetLines()
+        conn = vtk_to_numpy(cellsOf.GetConnectivityArray()).reshape(-1, nodes)
+    else:
+        conn = T.connectivity(mesh, nodes)
     ghosts = mesh.GetCellData().GetArray(vtkDataSetAttributes.GhostArrayName())
     own = np.ones(len(conn), dtype=bool) if ghosts is None else vtk_to_numpy(ghosts) == 0
     if not own.any():
@@ -77,7 +88,8 @@ def cells(mesh, nodes):
     corners = points[conn[own]]  # (m, nodes, 3)
     order = np.lexsort((corners[:, :, 2], corners[:, :, 1], corners[:, :, 0]), axis=1)
     corners = np.take_along_axis(corners, order[:, :, None], axis=1).reshape(len(corners), -1)
-    rows = np.column_stack([corners, T.cell_array(mesh, "Material")[own]])
+    label = "BoundaryLabels" if mesh.IsA("vtkPolyData") else "Material"
+    rows = np.column_stack([corners, T.cell_array(mesh, label)[own]])
     return rows[np.lexsort(rows.T[::-1])]
 
 
@@ -171,6 +183,7 @@ check_pieces(three_d, 3, False, 1, True, "3D to MarchingSimplices")
 check_pieces(three_d, 3, True, 2, True, "3D cell labels, L 2, to MarchingSimplices")
 check_pieces(three_d, 3, False, 1, False, "3D tessellation")
 check_pieces(three_d, 3, False, 1, "materials", "3D to MultiMaterialCut")
+check_pieces(three_d, 2, False, 1, "surface", "3D interface surfaces (triangles)")
 # 2 x 2 x 2 root cells and 10 pieces: two pieces are empty, quietly, and the others together
 # are still the serial mesh.
 check_pieces(ellipsoids((20, 20, 20)), 3, False, 1, True, "8 root cells", piece_counts=(10,))
