@@ -51,6 +51,12 @@ def chain(image, balance_level, cut, smooth=False, gray=None):
         stage = spacetreemesh.stmMultiMaterialCut()
         stage.SetInputConnection(stages[-1].GetOutputPort())
         stages.append(stage)
+    elif cut == "cut surface":
+        for cls in (spacetreemesh.stmVertexSnap, spacetreemesh.stmMarchingSimplices):
+            stage = cls()
+            stage.SetInputConnection(stages[-1].GetOutputPort())
+            stages.append(stage)
+        stages[-1].SetOutputMode(spacetreemesh.stmMarchingSimplices.SURFACE)
     elif cut == "surface":
         tree.SetThinPartRefinement(spacetreemesh.stmImageToSpacetree.THIN_MATERIAL_PARTS)
         for cls in (spacetreemesh.stmMultiMaterialCut, spacetreemesh.stmInterfaceSurface):
@@ -88,7 +94,8 @@ def cells(mesh, nodes):
     corners = points[conn[own]]  # (m, nodes, 3)
     order = np.lexsort((corners[:, :, 2], corners[:, :, 1], corners[:, :, 0]), axis=1)
     corners = np.take_along_axis(corners, order[:, :, None], axis=1).reshape(len(corners), -1)
-    label = "BoundaryLabels" if mesh.IsA("vtkPolyData") else "Material"
+    label = "BoundaryLabels" if mesh.GetCellData().GetArray("BoundaryLabels") else (
+        "OriginalMaterial" if mesh.IsA("vtkPolyData") else "Material")
     rows = np.column_stack([corners, T.cell_array(mesh, label)[own]])
     return rows[np.lexsort(rows.T[::-1])]
 
@@ -184,6 +191,7 @@ check_pieces(three_d, 3, True, 2, True, "3D cell labels, L 2, to MarchingSimplic
 check_pieces(three_d, 3, False, 1, False, "3D tessellation")
 check_pieces(three_d, 3, False, 1, "materials", "3D to MultiMaterialCut")
 check_pieces(three_d, 2, False, 1, "surface", "3D interface surfaces (triangles)")
+check_pieces(three_d, 2, False, 1, "cut surface", "3D cut surface (triangles)")
 # 2 x 2 x 2 root cells and 10 pieces: two pieces are empty, quietly, and the others together
 # are still the serial mesh.
 check_pieces(ellipsoids((20, 20, 20)), 3, False, 1, True, "8 root cells", piece_counts=(10,))
