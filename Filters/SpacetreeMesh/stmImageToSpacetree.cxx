@@ -797,8 +797,10 @@ int stmImageToSpacetree::RequestUpdateExtent(
     {
       const int axis = piece.ImageAxes[i];
       extent[2 * axis] = piece.WholeExtent[2 * axis] + static_cast<int>(piece.FirstVoxel[i]);
-      extent[2 * axis + 1] =
-        extent[2 * axis] + static_cast<int>(piece.VoxelCount[i]) - 1 + (cellLabels ? 1 : 0);
+      // One point more than point labels need: cell labels, which an unset array selection
+      // may turn out to be, need it (RequestData crops the extra voxels away).
+      extent[2 * axis + 1] = std::min(
+        piece.WholeExtent[2 * axis + 1], extent[2 * axis] + static_cast<int>(piece.VoxelCount[i]));
     }
   }
   inInfo->Set(Pipeline::UPDATE_PIECE_NUMBER(), 0);
@@ -968,7 +970,9 @@ int stmImageToSpacetree::RequestData(
       vtkErrorMacro("ImageToSpacetree failed: the image's extent ("
         << extent[0] << " " << extent[1] << " " << extent[2] << " " << extent[3] << " " << extent[4]
         << " " << extent[5] << ") does not hold the voxels of piece "
-        << stmPieces::RequestedPiece(outInfo) << " and its ghost layer.");
+        << stmPieces::RequestedPiece(outInfo)
+        << " and its ghost layer (select the label array, so that its association is known "
+           "when the voxels are requested).");
       return 0;
     }
   }
