@@ -1,6 +1,6 @@
 """Meshes a label image in pieces, one per MPI rank (ImageToSpacetree's SplitIntoPieces), with the
-default pipeline, and prints each rank's time and cells; with an output path, writes the pieces
-as one .pvtu (inline binary, ghost cells marked vtkGhostType).
+default pipeline, and prints each rank's time, cells and peak memory; with an output path,
+writes the pieces as one .pvtu (inline binary, ghost cells marked vtkGhostType).
 
     mpiexec -n 2 pvbatch --symmetric scripts/mesh-in-pieces.py aal.nii.gz [out.pvtu]
 
@@ -8,6 +8,7 @@ Run by pvbatch or pvpython with the plugin built in ./build (or STM_PLUGIN namin
 pvpython there is one rank: the whole image in one piece, for comparison.
 """
 import os
+import resource
 import sys
 import time
 
@@ -45,13 +46,18 @@ for make in (spacetreemesh.stmSpacetreeBalance, spacetreemesh.stmSpacetreeTessel
              spacetreemesh.stmBoundarySmooth):
     stages.append(make())
     stages[-1].SetInputConnection(stages[-2].GetOutputPort())
+# Each stage's output is freed once the next has run, as stmesh does between its stages.
+reader.ReleaseDataFlagOn()
+for stage in stages[:-1]:
+    stage.ReleaseDataFlagOn()
 if not stages[-1].UpdatePiece(rank, ranks, 0):
     sys.exit("rank %d: meshing failed" % rank)
 mesh = stages[-1].GetOutput()
 ghosts = mesh.GetCellData().GetArray(vtkDataSetAttributes.GhostArrayName())
 owned = mesh.GetNumberOfCells() - (int((vtk_to_numpy(ghosts) != 0).sum()) if ghosts else 0)
-print("rank %d of %d: %.2f s, %d cells, %d of them its own" % (
-    rank, ranks, time.time() - start, mesh.GetNumberOfCells(), owned), flush=True)
+print("rank %d of %d: %.2f s, %d cells, %d of them its own, peak RSS %.0f MiB" % (
+    rank, ranks, time.time() - start, mesh.GetNumberOfCells(), owned,
+    resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0), flush=True)
 
 if len(sys.argv) == 3:
     writer = vtkXMLPUnstructuredGridWriter()
