@@ -19,9 +19,9 @@ namespace stm
 {
 
 /// "" when the header is fine or not NIfTI at all (VTK refuses those itself), else why it is
-/// corrupt: a datatype NIfTI does not define, a bitpix that does not match the datatype, a
-/// dim[0] outside 1 to 7, or an axis below it of no positive size. NIfTI-1 and NIfTI-2, either byte
-/// order, .nii or .nii.gz.
+/// corrupt: a NIfTI magic with a sizeof_hdr that is neither 348 nor 540, a datatype NIfTI does
+/// not define, a bitpix that does not match the datatype, a dim[0] outside 1 to 7, or an axis
+/// below it of no positive size. NIfTI-1 and NIfTI-2, either byte order, .nii or .nii.gz.
 inline std::string NIFTIHeaderProblem(const std::string& path)
 {
   unsigned char header[540] = {};
@@ -56,7 +56,24 @@ inline std::string NIFTIHeaderProblem(const std::string& path)
       break;
     }
   }
-  if (version == 0 || length < (version == 1 ? 348 : 540))
+  if (version == 0)
+  {
+    // VTK's reader knows NIfTI by its magic, not by sizeof_hdr, and then reads the header as it
+    // is (found by fuzzing: sizeof_hdr 490 with the magic "n+1" crashed it).
+    auto magic = [&](int offset, char digit)
+    {
+      return length >= offset + 4 && header[offset] == 'n' &&
+        (header[offset + 1] == '+' || header[offset + 1] == 'i') && header[offset + 2] == digit &&
+        header[offset + 3] == 0;
+    };
+    if (magic(344, '1') || magic(4, '2'))
+    {
+      return "the NIfTI header's sizeof_hdr is " + std::to_string(integer(0, 4, false)) +
+        ", not 348 (NIfTI-1) or 540 (NIfTI-2) (a corrupt header)";
+    }
+    return std::string();
+  }
+  if (length < (version == 1 ? 348 : 540))
   {
     return std::string();
   }
