@@ -2,6 +2,7 @@
 #include "stmBoundarySmooth.h"
 
 #include "stmCutInput.h"
+#include "stmPieces.h"
 #include "stmPlaneFrame.h"
 #include "stmSMPExecutor.h"
 
@@ -33,6 +34,7 @@
 #include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <mutex>
@@ -249,22 +251,16 @@ stm::Status SplitEdges(SmoothRequest& request, const IdType* connectivity,
 template <int Dim, class IdType>
 std::vector<std::uint8_t> GhostCellPoints(vtkUnstructuredGrid* input, const IdType* connectivity)
 {
-  auto* ghosts = vtkUnsignedCharArray::SafeDownCast(
-    input->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName()));
-  std::vector<std::uint8_t> held;
-  if (!ghosts)
+  const unsigned char* ghosts = stmPieces::GhostCellFlags(input);
+  const vtkIdType cells = input->GetNumberOfCells();
+  if (!ghosts || std::none_of(ghosts, ghosts + cells, [](unsigned char g) { return g != 0; }))
   {
-    return held;
+    return {};
   }
-  const unsigned char* flags = ghosts->GetPointer(0);
-  for (vtkIdType c = 0; c < ghosts->GetNumberOfValues(); ++c)
+  std::vector<std::uint8_t> held(static_cast<std::size_t>(input->GetNumberOfPoints()), 0);
+  for (vtkIdType c = 0; c < cells; ++c)
   {
-    if (flags[c] == 0)
-    {
-      continue;
-    }
-    held.resize(static_cast<std::size_t>(input->GetNumberOfPoints()), 0);
-    for (int v = 0; v <= Dim; ++v)
+    for (int v = 0; v <= Dim && ghosts[c] != 0; ++v)
     {
       held[static_cast<std::size_t>(connectivity[c * (Dim + 1) + v])] = 1;
     }

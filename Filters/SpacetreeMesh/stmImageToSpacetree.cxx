@@ -827,12 +827,13 @@ int stmImageToSpacetree::RequestData(
     return 0;
   }
   PieceLayout piece;
+  const bool assumedCellLabels = LabelsAreCellData(this);
   if (splitting)
   {
     // As RequestUpdateExtent laid it out; a piece without root cells got no voxels.
     std::string error;
     if (!LayOutRequestedPiece(this, outInfo, inputVector[0]->GetInformationObject(0),
-          LabelsAreCellData(this), input->GetDirectionMatrix()->GetData(), piece, error))
+          assumedCellLabels, input->GetDirectionMatrix()->GetData(), piece, error))
     {
       vtkErrorMacro("ImageToSpacetree failed: " << error);
       return 0;
@@ -895,16 +896,14 @@ int stmImageToSpacetree::RequestData(
   input->GetDimensions(pointDims);
   const bool cellLabels = association == vtkDataObject::FIELD_ASSOCIATION_CELLS;
   int voxelDims[3];
-  stmSpacetreeGeometry geometry;
-  geometry.Dimension = 0;
   for (int axis = 0; axis < 3; ++axis)
   {
     voxelDims[axis] = cellLabels ? std::max(1, pointDims[axis] - 1) : pointDims[axis];
-    if (voxelDims[axis] > 1)
-    {
-      geometry.ImageAxes[geometry.Dimension++] = axis;
-    }
   }
+  double spacing[3];
+  input->GetSpacing(spacing);
+  const double* direction = input->GetDirectionMatrix()->GetData();
+  stmSpacetreeGeometry geometry = ImageGeometry(voxelDims, spacing, direction);
   if (labels->GetNumberOfTuples() !=
     static_cast<vtkIdType>(voxelDims[0]) * voxelDims[1] * voxelDims[2])
   {
@@ -917,8 +916,6 @@ int stmImageToSpacetree::RequestData(
                                    << " voxels; ImageToSpacetree needs a 2D or 3D image.");
     return 0;
   }
-  double spacing[3];
-  input->GetSpacing(spacing);
   if (!(spacing[0] > 0 && spacing[1] > 0 && spacing[2] > 0) || !std::isfinite(spacing[0]) ||
     !std::isfinite(spacing[1]) || !std::isfinite(spacing[2]))
   {
@@ -926,20 +923,7 @@ int stmImageToSpacetree::RequestData(
                                         << ") must be positive and finite.");
     return 0;
   }
-  const double* direction = input->GetDirectionMatrix()->GetData();
-  double origin[3];
-  input->GetOrigin(origin);
-  for (int c = 0; c < 3; ++c)
-  {
-    geometry.Origin[c] = origin[c];
-  }
-  for (int axis = 0; axis < 3; ++axis)
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      geometry.AxisVectors[axis][c] = direction[3 * c + axis] * spacing[axis];
-    }
-  }
+  input->GetOrigin(geometry.Origin);
   // The first voxel has the extent's first index, not 0, in an image that is part of a larger
   // one (ExtractSubset's VOI, a streamed piece): the lattice starts at that voxel. A piece's
   // lattice starts where the whole image's does, and its voxels are counted from there
@@ -948,10 +932,11 @@ int stmImageToSpacetree::RequestData(
   input->GetExtent(extent);
   if (splitting)
   {
-    // Again with the label array's association as it turned out.
+    // Again where the label array's association turned out other than the selection said.
     std::string error;
-    if (!LayOutRequestedPiece(this, outInfo, inputVector[0]->GetInformationObject(0), cellLabels,
-          direction, piece, error))
+    if (cellLabels != assumedCellLabels &&
+      !LayOutRequestedPiece(this, outInfo, inputVector[0]->GetInformationObject(0), cellLabels,
+        direction, piece, error))
     {
       vtkErrorMacro("ImageToSpacetree failed: " << error);
       return 0;

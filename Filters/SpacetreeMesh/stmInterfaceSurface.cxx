@@ -11,7 +11,6 @@
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkDataArray.h"
-#include "vtkDataSetAttributes.h"
 #include "vtkIdTypeArray.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
@@ -24,7 +23,6 @@
 #include "vtkSMPTools.h"
 #include "vtkTypeInt32Array.h"
 #include "vtkTypeInt64Array.h"
-#include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 
 #include <limits>
@@ -125,20 +123,7 @@ stm::Status Extract(stmInterfaceSurface* filter, vtkUnstructuredGrid* input,
   }
   output->GetCellData()->AddArray(labels);
   output->GetCellData()->AddArray(cellIds);
-  // A piece (SplitIntoPieces): a facet is a ghost where the cell it was taken from is, so that
-  // every facet is owned by exactly one piece (the facets at the ghost layer's outer end too).
-  if (auto* ghosts = vtkUnsignedCharArray::SafeDownCast(
-        input->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName())))
-  {
-    vtkNew<vtkUnsignedCharArray> facetGhosts;
-    facetGhosts->SetName(vtkDataSetAttributes::GhostArrayName());
-    facetGhosts->SetNumberOfValues(count);
-    for (vtkIdType f = 0; f < count; ++f)
-    {
-      facetGhosts->SetValue(f, ghosts->GetValue(static_cast<vtkIdType>(facets.Cells[f])));
-    }
-    output->GetCellData()->AddArray(facetGhosts);
-  }
+  stmPieces::AddFacetGhosts(input, facets.Cells.data(), count, output);
   stmPieces::PassPieceMarker(input, output);
   return stm::Status::Ok();
 }

@@ -12,7 +12,6 @@
 #include "vtkCellData.h"
 #include "vtkCellType.h"
 #include "vtkDataArray.h"
-#include "vtkDataSetAttributes.h"
 #include "vtkDoubleArray.h"
 #include "vtkIdList.h"
 #include "vtkInformation.h"
@@ -330,20 +329,8 @@ stm::Status CutSurface(CutRequest& request, stm::MarchingSimplices<Dim>& cutter,
     }
     outCD->AddArray(original);
   }
-  // A piece (SplitIntoPieces): a facet is a ghost where its inside cell is, so that every facet
-  // is owned by exactly one piece.
-  if (auto* ghosts = vtkUnsignedCharArray::SafeDownCast(
-        input->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName())))
-  {
-    vtkNew<vtkUnsignedCharArray> facetGhosts;
-    facetGhosts->SetName(vtkDataSetAttributes::GhostArrayName());
-    facetGhosts->SetNumberOfValues(facetCount);
-    for (vtkIdType f = 0; f < facetCount; ++f)
-    {
-      facetGhosts->SetValue(f, ghosts->GetValue(static_cast<vtkIdType>(insideParents[f])));
-    }
-    outCD->AddArray(facetGhosts);
-  }
+  // A facet is a ghost of a piece where its inside cell is.
+  stmPieces::AddFacetGhosts(input, insideParents.data(), facetCount, output);
   if (Dim == 3)
   {
     vtkNew<vtkDoubleArray> normals;

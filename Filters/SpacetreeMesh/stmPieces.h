@@ -19,13 +19,17 @@
 #ifndef stmPieces_h
 #define stmPieces_h
 
+#include "vtkCellData.h"
 #include "vtkDataSet.h"
+#include "vtkDataSetAttributes.h"
 #include "vtkFieldData.h"
 #include "vtkInformation.h"
 #include "vtkIntArray.h"
 #include "vtkNew.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkUnsignedCharArray.h"
 
+#include <cstdint>
 #include <string>
 
 namespace stmPieces
@@ -95,20 +99,51 @@ inline void MarkPiece(vtkFieldData* fieldData)
   fieldData->AddArray(marker);
 }
 
+/// Whether a dataset is a piece made with SplitIntoPieces.
+inline bool IsMarkedPiece(vtkDataSet* data)
+{
+  return data && data->GetFieldData() && data->GetFieldData()->GetArray(PieceMarkerName);
+}
+
 /// Marks `output` as a piece when `input` is one: for the stages whose output field data the
 /// executive does not pass on.
 inline void PassPieceMarker(vtkDataSet* input, vtkDataSet* output)
 {
-  if (input && output && input->GetFieldData() && input->GetFieldData()->GetArray(PieceMarkerName))
+  if (output && IsMarkedPiece(input))
   {
     MarkPiece(output->GetFieldData());
   }
 }
 
-/// Whether a dataset is a piece made with SplitIntoPieces.
-inline bool IsMarkedPiece(vtkDataSet* data)
+/// A piece's vtkGhostType per cell (non-zero: a ghost), or null for a dataset without it.
+inline const unsigned char* GhostCellFlags(vtkDataSet* data)
 {
-  return data && data->GetFieldData() && data->GetFieldData()->GetArray(PieceMarkerName);
+  auto* ghosts = data ? vtkUnsignedCharArray::SafeDownCast(
+                          data->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName()))
+                      : nullptr;
+  return ghosts ? ghosts->GetPointer(0) : nullptr;
+}
+
+/// For the facets of a surface taken from the cells of `input`: vtkGhostType per facet, that of
+/// the cell facet f was taken from (sourceCells[f]), so that every facet is owned by exactly one
+/// piece (the facets at a ghost layer's outer end are ghosts too). Nothing for an input without
+/// ghost cells.
+inline void AddFacetGhosts(
+  vtkDataSet* input, const std::int64_t* sourceCells, vtkIdType facets, vtkDataSet* output)
+{
+  const unsigned char* cellGhosts = GhostCellFlags(input);
+  if (!cellGhosts)
+  {
+    return;
+  }
+  vtkNew<vtkUnsignedCharArray> facetGhosts;
+  facetGhosts->SetName(vtkDataSetAttributes::GhostArrayName());
+  facetGhosts->SetNumberOfValues(facets);
+  for (vtkIdType f = 0; f < facets; ++f)
+  {
+    facetGhosts->SetValue(f, cellGhosts[sourceCells[f]]);
+  }
+  output->GetCellData()->AddArray(facetGhosts);
 }
 
 /// What a stage after ImageToSpacetree does with the request on `info` (its input's
