@@ -61,19 +61,10 @@ def read(path):
 def serial_chain(source, gray=None):
     """The stages as VTK objects on the whole image, asked for no piece: the reference."""
     stages = list(T.spacetree_chain(source))
-    tessellate = stages[-1]
     if gray is not None:
-        function = spacetreemesh.stmSeparatingFunction()
-        function.SetInputConnection(tessellate.GetOutputPort())
-        function.SetGrayImageConnection(gray.GetOutputPort())
-        function.SetMode(spacetreemesh.stmSeparatingFunction.GRAY_IMAGE)
-        function.SetThreshold(0.0)
-        stages.append(function)
-    for cls in (spacetreemesh.stmVertexSnap, spacetreemesh.stmMarchingSimplices,
-                spacetreemesh.stmBoundarySmooth):
-        stage = cls()
-        stage.SetInputConnection(stages[-1].GetOutputPort())
-        stages.append(stage)
+        stages.append(T.gray_separating_function(stages[-1], gray.GetOutputPort(), 0.0))
+    T.append_stages(stages, spacetreemesh.stmVertexSnap, spacetreemesh.stmMarchingSimplices,
+                    spacetreemesh.stmBoundarySmooth)
     return stages
 
 

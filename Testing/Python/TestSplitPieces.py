@@ -40,40 +40,20 @@ def chain(image, balance_level, cut, smooth=False, gray=None):
     if gray is not None:
         gray_producer = vtkTrivialProducer()
         gray_producer.SetOutput(gray)
-        function = spacetreemesh.stmSeparatingFunction()
-        function.SetInputConnection(tessellate.GetOutputPort())
-        function.SetGrayImageConnection(gray_producer.GetOutputPort())
-        function.SetMode(spacetreemesh.stmSeparatingFunction.GRAY_IMAGE)
-        function.SetThreshold(0.5)
-        stages.append(function)
-    if cut == "materials":
+        stages.append(T.gray_separating_function(tessellate, gray_producer.GetOutputPort(), 0.5))
+    if cut in ("materials", "surface"):
         tree.SetThinPartRefinement(spacetreemesh.stmImageToSpacetree.THIN_MATERIAL_PARTS)
-        stage = spacetreemesh.stmMultiMaterialCut()
-        stage.SetInputConnection(stages[-1].GetOutputPort())
-        stages.append(stage)
-    elif cut == "cut surface":
-        for cls in (spacetreemesh.stmVertexSnap, spacetreemesh.stmMarchingSimplices):
-            stage = cls()
-            stage.SetInputConnection(stages[-1].GetOutputPort())
-            stages.append(stage)
-        stages[-1].SetOutputMode(spacetreemesh.stmMarchingSimplices.SURFACE)
-    elif cut == "surface":
-        tree.SetThinPartRefinement(spacetreemesh.stmImageToSpacetree.THIN_MATERIAL_PARTS)
-        for cls in (spacetreemesh.stmMultiMaterialCut, spacetreemesh.stmInterfaceSurface):
-            stage = cls()
-            stage.SetInputConnection(stages[-1].GetOutputPort())
-            stages.append(stage)
-        stages[-1].SetIncludeOuterBoundary(True)
+        T.append_stages(stages, spacetreemesh.stmMultiMaterialCut)
+        if cut == "surface":
+            T.append_stages(stages, spacetreemesh.stmInterfaceSurface).SetIncludeOuterBoundary(True)
     elif cut:
-        for cls in (spacetreemesh.stmVertexSnap, spacetreemesh.stmMarchingSimplices):
-            stage = cls()
-            stage.SetInputConnection(stages[-1].GetOutputPort())
-            stages.append(stage)
+        last = T.append_stages(stages, spacetreemesh.stmVertexSnap,
+                               spacetreemesh.stmMarchingSimplices)
+        if cut == "cut surface":
+            last.SetOutputMode(spacetreemesh.stmMarchingSimplices.SURFACE)
     if smooth:
-        stage = spacetreemesh.stmBoundarySmooth()
-        stage.SetInputConnection(stages[-1].GetOutputPort())
-        stage.SetSplitInteriorEdges(False)  # pieces do not split edges: compare like with like
-        stages.append(stage)
+        # Pieces do not split edges: compare like with like.
+        T.append_stages(stages, spacetreemesh.stmBoundarySmooth).SetSplitInteriorEdges(False)
     return stages
 
 

@@ -396,6 +396,29 @@ def spacetree_chain(source):
     return tree, balance, tessellate
 
 
+def append_stages(stages, *classes):
+    """Appends to the list `stages` a new object of each vtkAlgorithm class, each fed by the one
+    before it; returns the last."""
+    for cls in classes:
+        stage = cls()
+        stage.SetInputConnection(stages[-1].GetOutputPort())
+        stages.append(stage)
+    return stages[-1]
+
+
+def gray_separating_function(upstream, gray_port, threshold):
+    """stmSeparatingFunction after the algorithm upstream, in GRAY_IMAGE mode at `threshold`,
+    sampling the image at the algorithm output gray_port; not yet updated."""
+    import spacetreemesh
+
+    function = spacetreemesh.stmSeparatingFunction()
+    function.SetInputConnection(upstream.GetOutputPort())
+    function.SetGrayImageConnection(gray_port)
+    function.SetMode(spacetreemesh.stmSeparatingFunction.GRAY_IMAGE)
+    function.SetThreshold(threshold)
+    return function
+
+
 def atlas_chain(path):
     """The reader of the NIfTI image at path and spacetree_chain after it."""
     from vtkmodules.vtkIOImage import vtkNIFTIImageReader
