@@ -26,6 +26,7 @@
 #include "vtkInformation.h"
 #include "vtkIntArray.h"
 #include "vtkNew.h"
+#include "vtkSmartPointer.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkUnsignedCharArray.h"
 
@@ -124,6 +125,15 @@ inline const unsigned char* GhostCellFlags(vtkDataSet* data)
   return ghosts ? ghosts->GetPointer(0) : nullptr;
 }
 
+/// A new vtkGhostType array of `count` values, to be filled.
+inline vtkSmartPointer<vtkUnsignedCharArray> NewGhostArray(vtkIdType count)
+{
+  auto ghosts = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  ghosts->SetName(vtkDataSetAttributes::GhostArrayName());
+  ghosts->SetNumberOfValues(count);
+  return ghosts;
+}
+
 /// For the facets of a surface taken from the cells of `input`: vtkGhostType per facet, that of
 /// the cell facet f was taken from (sourceCells[f]), so that every facet is owned by exactly one
 /// piece (the facets at a ghost layer's outer end are ghosts too). Nothing for an input without
@@ -136,9 +146,7 @@ inline void AddFacetGhosts(
   {
     return;
   }
-  vtkNew<vtkUnsignedCharArray> facetGhosts;
-  facetGhosts->SetName(vtkDataSetAttributes::GhostArrayName());
-  facetGhosts->SetNumberOfValues(facets);
+  vtkSmartPointer<vtkUnsignedCharArray> facetGhosts = NewGhostArray(facets);
   for (vtkIdType f = 0; f < facets; ++f)
   {
     facetGhosts->SetValue(f, cellGhosts[sourceCells[f]]);

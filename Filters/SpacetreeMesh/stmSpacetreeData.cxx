@@ -334,14 +334,9 @@ bool ReadLeaves(vtkDataArray* levels, vtkDataArray* materials, vtkDataArray* ind
 } // namespace
 
 template <int Dim>
-std::vector<std::uint8_t> GhostLeafFlags(
-  const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry)
+void MarkGhostLeaves(
+  const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry, std::uint8_t* ghosts)
 {
-  std::vector<std::uint8_t> ghosts(static_cast<std::size_t>(tree.GetNumberOfLeaves()), 0);
-  if (!geometry.IsPiece)
-  {
-    return ghosts;
-  }
   const stm::LatticeIndex<Dim>& rootSize = tree.GetRootCellSize();
   vtkSMPTools::For(0, tree.GetNumberOfLeaves(), 8192,
     [&](vtkIdType begin, vtkIdType end)
@@ -356,7 +351,6 @@ std::vector<std::uint8_t> GhostLeafFlags(
         ghosts[leaf] = geometry.OwnsRoot(root) ? 0 : vtkDataSetAttributes::DUPLICATECELL;
       }
     });
-  return ghosts;
 }
 
 template <int Dim>
@@ -647,19 +641,16 @@ void WriteSpacetree(const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry&
     AddIntArray(fd, OwnedRootsName, owned);
     AddDoubleArray(fd, LatticeOffsetName, geometry.LatticeOffset, Dim);
     stmPieces::MarkPiece(fd);
-    std::vector<std::uint8_t> flags = GhostLeafFlags<Dim>(tree, geometry);
-    vtkNew<vtkUnsignedCharArray> ghosts;
-    ghosts->SetName(vtkDataSetAttributes::GhostArrayName());
-    ghosts->SetNumberOfValues(leaves);
-    std::copy(flags.begin(), flags.end(), ghosts->GetPointer(0));
+    vtkSmartPointer<vtkUnsignedCharArray> ghosts = stmPieces::NewGhostArray(leaves);
+    MarkGhostLeaves<Dim>(tree, geometry, ghosts->GetPointer(0));
     output->GetCellData()->AddArray(ghosts);
   }
 }
 
-template std::vector<std::uint8_t> GhostLeafFlags<2>(
-  const stm::Spacetree<2>&, const stmSpacetreeGeometry&);
-template std::vector<std::uint8_t> GhostLeafFlags<3>(
-  const stm::Spacetree<3>&, const stmSpacetreeGeometry&);
+template void MarkGhostLeaves<2>(
+  const stm::Spacetree<2>&, const stmSpacetreeGeometry&, std::uint8_t*);
+template void MarkGhostLeaves<3>(
+  const stm::Spacetree<3>&, const stmSpacetreeGeometry&, std::uint8_t*);
 template bool ReadSpacetree<2>(vtkUnstructuredGrid*, stm::Spacetree<2>&, std::string&);
 template bool ReadSpacetree<3>(vtkUnstructuredGrid*, stm::Spacetree<3>&, std::string&);
 template void WriteSpacetree<2>(

@@ -102,11 +102,11 @@ void RemoveSpacetreeFieldData(vtkFieldData* fieldData);
 template <int Dim>
 bool ReadSpacetree(vtkUnstructuredGrid* input, stm::Spacetree<Dim>& tree, std::string& error);
 
-/// Per leaf, vtkDataSetAttributes::DUPLICATECELL where its root cell is not the piece's own
-/// (stmSpacetreeGeometry::IsPiece), else 0.
+/// Writes per leaf into `ghosts` vtkDataSetAttributes::DUPLICATECELL where its root cell is not
+/// the piece's own (stmSpacetreeGeometry::IsPiece), else 0.
 template <int Dim>
-std::vector<std::uint8_t> GhostLeafFlags(
-  const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry);
+void MarkGhostLeaves(
+  const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry, std::uint8_t* ghosts);
 
 /// Writes the spacetree and its geometry into an (empty) unstructured grid; a piece's tree also
 /// gets its owned root cells, the piece marker and vtkGhostType on the ghost leaves.

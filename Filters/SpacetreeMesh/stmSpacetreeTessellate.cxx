@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "stmSpacetreeTessellate.h"
 
+#include "stmPieces.h"
 #include "stmSMPExecutor.h"
 #include "stmSpacetreeData.h"
 
@@ -10,7 +11,6 @@
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkCellType.h"
-#include "vtkDataSetAttributes.h"
 #include "vtkDoubleArray.h"
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
@@ -434,12 +434,10 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   if (geometry.IsPiece)
   {
     // A cell is a ghost where its leaf is.
-    const std::vector<std::uint8_t> ghostLeaves =
-      stmSpacetreeData::GhostLeafFlags<Dim>(tree, geometry);
+    std::vector<std::uint8_t> ghostLeaves(static_cast<std::size_t>(tree.GetNumberOfLeaves()));
+    stmSpacetreeData::MarkGhostLeaves<Dim>(tree, geometry, ghostLeaves.data());
     const std::vector<std::int64_t>& leafCells = tessellator.GetLeafCellOffsets();
-    vtkNew<vtkUnsignedCharArray> ghosts;
-    ghosts->SetName(vtkDataSetAttributes::GhostArrayName());
-    ghosts->SetNumberOfValues(cells);
+    vtkSmartPointer<vtkUnsignedCharArray> ghosts = stmPieces::NewGhostArray(cells);
     unsigned char* ghostValues = ghosts->GetPointer(0);
     vtkSMPTools::For(0, tree.GetNumberOfLeaves(),
       [&](vtkIdType begin, vtkIdType end)
