@@ -261,12 +261,11 @@ bool LayOutPiece(const RefinementRequest& request, const stmSpacetreeGeometry& g
     error = status.GetMessage();
     return false;
   }
-  stm::LatticeIndex<Dim> rootDims;
   for (int axis = 0; axis < Dim; ++axis)
   {
     layout.RootVoxels[axis] = plan.CellSizes[0][axis] / plan.VoxelSubdivision[axis];
-    rootDims[axis] = (dims[axis] + layout.RootVoxels[axis] - 1) / layout.RootVoxels[axis];
   }
+  const stm::LatticeIndex<Dim> rootDims = plan.RootGridDimensions(dims);
   const stm::RootBox<Dim> owned = stm::PieceRootBox<Dim>(rootDims, pieces, piece);
   const stm::RootBox<Dim> ghost = stm::GhostRootBox<Dim>(owned, rootDims);
   layout.Empty = owned.IsEmpty();

@@ -101,6 +101,18 @@ struct RefinementPlan
     return this->GetMaxLevel();
   }
 
+  /// Root cells per axis that cover an image of imageDimensions voxels (the last ones padded).
+  LatticeIndex<Dim> RootGridDimensions(const LatticeIndex<Dim>& imageDimensions) const
+  {
+    LatticeIndex<Dim> roots;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      const std::int64_t extent = imageDimensions[axis] * this->VoxelSubdivision[axis];
+      roots[axis] = (extent + this->CellSizes[0][axis] - 1) / this->CellSizes[0][axis];
+    }
+    return roots;
+  }
+
   void ApplyTo(Spacetree<Dim>& tree) const
   {
     tree.MaxLevel = this->GetMaxLevel();

@@ -84,12 +84,7 @@ public:
     plan.ApplyTo(tree);
     tree.ImageDimensions = image.Dimensions;
     tree.MaterialLabels = materialLabels;
-    for (int axis = 0; axis < Dim; ++axis)
-    {
-      const std::int64_t extent = image.Dimensions[axis] * tree.VoxelSubdivision[axis];
-      tree.RootGridDimensions[axis] =
-        (extent + tree.GetRootCellSize()[axis] - 1) / tree.GetRootCellSize()[axis];
-    }
+    tree.RootGridDimensions = plan.RootGridDimensions(image.Dimensions);
 
     const std::int64_t roots = NumberOfLatticeCells<Dim>(tree.RootGridDimensions);
     std::vector<Spacetree<Dim>> perRoot(static_cast<std::size_t>(roots));
