@@ -238,11 +238,11 @@ struct PieceLayout
   long long VoxelCount[3] = { 1, 1, 1 };
 };
 
-/// Lays out piece `piece` of `pieces` of an image of wholeVoxelDims voxels (per image axis),
-/// with the root cells the whole image's plan gives.
+/// Lays out piece `piece` of `pieces` of an image of layout.WholeVoxelDims voxels, with the root
+/// cells the whole image's plan gives.
 template <int Dim>
-bool LayOutPiece(const RefinementRequest& request, const stmSpacetreeGeometry& geometry,
-  const int wholeVoxelDims[3], int pieces, int piece, PieceLayout& layout, std::string& error)
+bool LayOutPiece(const RefinementRequest& request, const stmSpacetreeGeometry& geometry, int pieces,
+  int piece, PieceLayout& layout, std::string& error)
 {
   stm::RefinementPlanOptions<Dim> options;
   if (!MakePlanOptions<Dim>(request, geometry, options, error))
@@ -252,7 +252,7 @@ bool LayOutPiece(const RefinementRequest& request, const stmSpacetreeGeometry& g
   stm::LatticeIndex<Dim> dims;
   for (int axis = 0; axis < Dim; ++axis)
   {
-    dims[axis] = wholeVoxelDims[geometry.ImageAxes[axis]];
+    dims[axis] = layout.WholeVoxelDims[geometry.ImageAxes[axis]];
   }
   stm::RefinementPlan<Dim> plan;
   const stm::Status status = stm::PlanRefinement<Dim>(dims, options, plan);
@@ -280,6 +280,13 @@ bool LayOutPiece(const RefinementRequest& request, const stmSpacetreeGeometry& g
       layout.FirstVoxel[axis];
   }
   return true;
+}
+
+/// Voxels along an image axis of `points` points: one per point for point labels, one per cell
+/// for cell labels.
+int VoxelsAlong(int points, bool cellLabels)
+{
+  return cellLabels ? std::max(1, points - 1) : points;
 }
 
 /// The image geometry the plan sees: the spanned axes (more than one voxel) and the voxel
@@ -537,6 +544,7 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
   stmSpacetreeData::WriteSpacetree<Dim>(tree, geometry, output);
   return true;
 }
+
 /// Lays out the piece the output's request (outInfo) asks for, from the image's information
 /// (inInfo); false with `error` when it cannot.
 bool LayOutRequestedPiece(stmImageToSpacetree* filter, vtkInformation* outInfo,
@@ -557,19 +565,17 @@ bool LayOutRequestedPiece(stmImageToSpacetree* filter, vtkInformation* outInfo,
   }
   piece.Split = true;
   inInfo->Get(Pipeline::WHOLE_EXTENT(), piece.WholeExtent);
-  int voxelDims[3];
   for (int axis = 0; axis < 3; ++axis)
   {
-    const int points = piece.WholeExtent[2 * axis + 1] - piece.WholeExtent[2 * axis] + 1;
-    voxelDims[axis] = cellLabels ? std::max(1, points - 1) : points;
-    piece.WholeVoxelDims[axis] = voxelDims[axis];
+    piece.WholeVoxelDims[axis] =
+      VoxelsAlong(piece.WholeExtent[2 * axis + 1] - piece.WholeExtent[2 * axis] + 1, cellLabels);
   }
   double spacing[3] = { 1, 1, 1 };
   if (inInfo->Has(vtkDataObject::SPACING()))
   {
     inInfo->Get(vtkDataObject::SPACING(), spacing);
   }
-  const stmSpacetreeGeometry geometry = ImageGeometry(voxelDims, spacing, direction);
+  const stmSpacetreeGeometry geometry = ImageGeometry(piece.WholeVoxelDims, spacing, direction);
   if (geometry.Dimension < 2)
   {
     error = "Split Into Pieces needs a 2D or 3D image";
@@ -582,9 +588,8 @@ bool LayOutRequestedPiece(stmImageToSpacetree* filter, vtkInformation* outInfo,
   piece.Dimension = geometry.Dimension;
   std::copy(geometry.ImageAxes, geometry.ImageAxes + 3, piece.ImageAxes);
   const int number = stmPieces::RequestedPiece(outInfo);
-  return geometry.Dimension == 3
-    ? LayOutPiece<3>(request, geometry, voxelDims, pieces, number, piece, error)
-    : LayOutPiece<2>(request, geometry, voxelDims, pieces, number, piece, error);
+  return geometry.Dimension == 3 ? LayOutPiece<3>(request, geometry, pieces, number, piece, error)
+                                 : LayOutPiece<2>(request, geometry, pieces, number, piece, error);
 }
 
 /// Whether the label array selection names a cell array (known before the data arrive).
@@ -897,7 +902,7 @@ int stmImageToSpacetree::RequestData(
   int voxelDims[3];
   for (int axis = 0; axis < 3; ++axis)
   {
-    voxelDims[axis] = cellLabels ? std::max(1, pointDims[axis] - 1) : pointDims[axis];
+    voxelDims[axis] = VoxelsAlong(pointDims[axis], cellLabels);
   }
   double spacing[3];
   input->GetSpacing(spacing);
