@@ -1008,13 +1008,13 @@ int stmImageToSpacetree::RequestData(
         body.push_back(label);
       }
     }
-    if (body.empty() && splitting)
-    {
-      output->Initialize(); // the body lies in other pieces
-      return 1;
-    }
     if (body.empty())
     {
+      if (splitting)
+      {
+        output->Initialize(); // the body lies in other pieces
+        return 1;
+      }
       vtkErrorMacro("The body of interest is empty: the image holds no label other than the "
                     "background label "
         << this->BackgroundLabel << ".");
@@ -1085,12 +1085,12 @@ int stmImageToSpacetree::RequestData(
   for (const auto& entry : this->LabelMaxCellSizes)
   {
     const auto found = std::lower_bound(body.begin(), body.end(), entry.first);
-    if ((found == body.end() || *found != entry.first) && splitting)
-    {
-      continue; // a label of another piece
-    }
     if (found == body.end() || *found != entry.first)
     {
+      if (splitting)
+      {
+        continue; // a label of another piece
+      }
       vtkErrorMacro("LabelMaxCellSizes names label " << entry.first
                                                      << ", which is not in the body of interest.");
       return 0;
