@@ -333,10 +333,12 @@ std::vector<T> CropVoxels(
 
 template <int Dim>
 bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxelDims[3],
-  const int planVoxelDims[3], const PieceLayout* piece, stmSpacetreeGeometry geometry,
+  const PieceLayout* piece, stmSpacetreeGeometry geometry,
   const std::vector<long long>& materialLabels, const RefinementRequest& request,
   stmSMPExecutor& executor, vtkUnstructuredGrid* output, BuildReport& report, std::string& error)
 {
+  // A piece plans with the whole image's size, so that its root cells are the whole's.
+  const int* planVoxelDims = piece ? piece->WholeVoxelDims : voxelDims;
   stm::MaterialImage<Dim> image;
   stm::LatticeIndex<Dim> planDims;
   for (int axis = 0; axis < Dim; ++axis)
@@ -412,7 +414,6 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
         0.5 * *std::min_element(planOptions.Spacing.begin(), planOptions.Spacing.end());
       planOptions.FinestSize = finest > 0 ? std::min(finest, half) : half;
     }
-    // A piece plans with the whole image's size, so that its root cells are the whole's.
     return stm::PlanRefinement<Dim>(planDims, planOptions, result);
   };
   auto latticeCellsOf = [&](const stm::RefinementPlan<Dim>& result)
@@ -1193,8 +1194,7 @@ int stmImageToSpacetree::RequestData(
     return 1;
   }
 
-  // A piece: its ghost box's voxels only, planned as the whole image.
-  int planVoxelDims[3] = { voxelDims[0], voxelDims[1], voxelDims[2] };
+  // A piece: its ghost box's voxels only (BuildTree plans it as the whole image).
   if (splitting)
   {
     long long first[3] = { 0, 0, 0 };
@@ -1209,7 +1209,6 @@ int stmImageToSpacetree::RequestData(
       geometry.OwnedRootLower[i] = piece.OwnedLower[i] - piece.GhostLower[i];
       geometry.OwnedRootUpper[i] = piece.OwnedUpper[i] - piece.GhostLower[i];
     }
-    std::copy(piece.WholeVoxelDims, piece.WholeVoxelDims + 3, planVoxelDims);
     materials = CropVoxels(materials, voxelDims, first, count);
     if (!request.InRegion.empty())
     {
@@ -1229,10 +1228,10 @@ int stmImageToSpacetree::RequestData(
   this->NumberOfThinVoxels = 0;
   this->NumberOfMinorityCornerVoxels = 0;
   const bool built = geometry.Dimension == 3
-    ? BuildTree<3>(materials, voxelDims, planVoxelDims, splitting ? &piece : nullptr, geometry,
-        materialLabels, request, executor, output, report, error)
-    : BuildTree<2>(materials, voxelDims, planVoxelDims, splitting ? &piece : nullptr, geometry,
-        materialLabels, request, executor, output, report, error);
+    ? BuildTree<3>(materials, voxelDims, splitting ? &piece : nullptr, geometry, materialLabels,
+        request, executor, output, report, error)
+    : BuildTree<2>(materials, voxelDims, splitting ? &piece : nullptr, geometry, materialLabels,
+        request, executor, output, report, error);
   if (!report.Warning.empty())
   {
     vtkWarningMacro(<< report.Warning);
