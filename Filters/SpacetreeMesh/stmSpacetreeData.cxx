@@ -4,6 +4,7 @@
 #include "stmPieces.h"
 
 #include "Common/LatticeBitset.h"
+#include "Spacetree/RootPieces.h"
 #include "Spacetree/SpacetreeValidate.h"
 
 #include "vtkAlgorithm.h"
@@ -338,17 +339,23 @@ void MarkGhostLeaves(
   const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry, std::uint8_t* ghosts)
 {
   const stm::LatticeIndex<Dim>& rootSize = tree.GetRootCellSize();
+  stm::RootBox<Dim> owned;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    owned.Lower[axis] = geometry.OwnedRootLower[axis];
+    owned.Upper[axis] = geometry.OwnedRootUpper[axis];
+  }
   vtkSMPTools::For(0, tree.GetNumberOfLeaves(), 8192,
     [&](vtkIdType begin, vtkIdType end)
     {
       for (vtkIdType leaf = begin; leaf < end; ++leaf)
       {
-        long long root[3] = { 0, 0, 0 };
+        stm::LatticeIndex<Dim> root;
         for (int axis = 0; axis < Dim; ++axis)
         {
           root[axis] = tree.LeafAnchors[leaf][axis] / rootSize[axis];
         }
-        ghosts[leaf] = geometry.OwnsRoot(root) ? 0 : vtkDataSetAttributes::DUPLICATECELL;
+        ghosts[leaf] = owned.Contains(root) ? 0 : vtkDataSetAttributes::DUPLICATECELL;
       }
     });
 }

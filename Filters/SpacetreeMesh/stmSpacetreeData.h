@@ -42,19 +42,6 @@ struct stmSpacetreeGeometry
   long long OwnedRootLower[3] = { 0, 0, 0 };
   long long OwnedRootUpper[3] = { 0, 0, 0 };
 
-  /// Whether a root cell (per spacetree axis) is the piece's own; always for a whole image.
-  bool OwnsRoot(const long long* root) const
-  {
-    for (int i = 0; i < this->Dimension && this->IsPiece; ++i)
-    {
-      if (root[i] < this->OwnedRootLower[i] || root[i] >= this->OwnedRootUpper[i])
-      {
-        return false;
-      }
-    }
-    return true;
-  }
-
   /// Lattice units from Origin to the tree's lattice point 0 per spacetree axis: 0 for a whole
   /// image; for a piece, where its first voxel lies in the whole image, so that its points are
   /// computed as the whole image's are, bit for bit.
@@ -102,8 +89,8 @@ void RemoveSpacetreeFieldData(vtkFieldData* fieldData);
 template <int Dim>
 bool ReadSpacetree(vtkUnstructuredGrid* input, stm::Spacetree<Dim>& tree, std::string& error);
 
-/// Writes per leaf into `ghosts` vtkDataSetAttributes::DUPLICATECELL where its root cell is not
-/// the piece's own (stmSpacetreeGeometry::IsPiece), else 0.
+/// For a piece's tree (stmSpacetreeGeometry::IsPiece): writes per leaf into `ghosts`
+/// vtkDataSetAttributes::DUPLICATECELL where its root cell is not the piece's own, else 0.
 template <int Dim>
 void MarkGhostLeaves(
   const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry, std::uint8_t* ghosts);
