@@ -264,9 +264,8 @@ void ExpectPiecesReproduceTheWholeMesh(const LabelImage<D>& image, const PieceCa
         local.Upper[axis] = owned.Upper[axis] - ghost.Lower[axis];
       }
       const std::vector<CellKey<D>> cells = OwnedCells<D>(mesh, local, rootHalfUnits, halfOffset);
-      stm::RootBox<D> ownedWhole = owned;
       const std::vector<CellKey<D>> wholeCells =
-        OwnedCells<D>(wholeMesh, ownedWhole, rootHalfUnits, stm::LatticeIndex<D>{});
+        OwnedCells<D>(wholeMesh, owned, rootHalfUnits, stm::LatticeIndex<D>{});
       EXPECT_EQ(cells.size(), wholeCells.size());
       EXPECT_TRUE(cells == wholeCells) << "the piece's own cells are not the whole mesh's";
       together.insert(together.end(), cells.begin(), cells.end());
