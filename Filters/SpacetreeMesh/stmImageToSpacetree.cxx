@@ -778,7 +778,6 @@ int stmImageToSpacetree::FillInputPortInformation(int, vtkInformation* info)
 int stmImageToSpacetree::RequestUpdateExtent(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  using Pipeline = vtkStreamingDemandDrivenPipeline;
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
   vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
   const bool cellLabels = LabelsAreCellData(this);
@@ -808,9 +807,7 @@ int stmImageToSpacetree::RequestUpdateExtent(
         piece.WholeExtent[2 * axis + 1], extent[2 * axis] + static_cast<int>(piece.VoxelCount[i]));
     }
   }
-  inInfo->Set(Pipeline::UPDATE_PIECE_NUMBER(), 0);
-  inInfo->Set(Pipeline::UPDATE_NUMBER_OF_PIECES(), 1);
-  inInfo->Set(Pipeline::UPDATE_EXTENT(), extent, 6);
+  stmPieces::RequestImageExtent(inInfo, extent);
   return 1;
 }
 

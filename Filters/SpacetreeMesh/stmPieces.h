@@ -44,25 +44,39 @@ inline int RequestedPiece(vtkInformation* info)
     : 0;
 }
 
-/// Asks the image on `imageInfo` (an input's information) for the whole image when
-/// `requestInfo` (the output's request) is for piece 0 (or for any piece with `everyPiece`),
-/// and for nothing otherwise.
-inline void RequestWholeImageOnFirstPiece(
-  vtkInformation* requestInfo, vtkInformation* imageInfo, bool everyPiece = false)
+/// Asks the image on `imageInfo` (an input's information) for `extent` (not null) as piece 0
+/// of 1, so that an image reader does not split it further.
+inline void RequestImageExtent(vtkInformation* imageInfo, const int* extent)
 {
   using Pipeline = vtkStreamingDemandDrivenPipeline;
-  if (!imageInfo)
+  imageInfo->Set(Pipeline::UPDATE_PIECE_NUMBER(), 0);
+  imageInfo->Set(Pipeline::UPDATE_NUMBER_OF_PIECES(), 1);
+  if (extent)
   {
-    return;
+    imageInfo->Set(Pipeline::UPDATE_EXTENT(), extent, 6);
   }
-  if (everyPiece || RequestedPiece(requestInfo) == 0)
+}
+
+/// Asks the image on `imageInfo` for all of it (its whole extent, where known).
+inline void RequestWholeImage(vtkInformation* imageInfo)
+{
+  using Pipeline = vtkStreamingDemandDrivenPipeline;
+  if (imageInfo)
   {
-    imageInfo->Set(Pipeline::UPDATE_PIECE_NUMBER(), 0);
-    imageInfo->Set(Pipeline::UPDATE_NUMBER_OF_PIECES(), 1);
-    if (imageInfo->Has(Pipeline::WHOLE_EXTENT()))
-    {
-      imageInfo->Set(Pipeline::UPDATE_EXTENT(), imageInfo->Get(Pipeline::WHOLE_EXTENT()), 6);
-    }
+    RequestImageExtent(imageInfo,
+      imageInfo->Has(Pipeline::WHOLE_EXTENT()) ? imageInfo->Get(Pipeline::WHOLE_EXTENT())
+                                               : nullptr);
+  }
+}
+
+/// Asks the image on `imageInfo` for the whole image when `requestInfo` (the output's request)
+/// is for piece 0, and for nothing otherwise.
+inline void RequestWholeImageOnFirstPiece(vtkInformation* requestInfo, vtkInformation* imageInfo)
+{
+  using Pipeline = vtkStreamingDemandDrivenPipeline;
+  if (!imageInfo || RequestedPiece(requestInfo) == 0)
+  {
+    RequestWholeImage(imageInfo);
     return;
   }
   static const int nothing[6] = { 0, -1, 0, -1, 0, -1 };
@@ -73,9 +87,9 @@ inline void RequestWholeImageOnFirstPiece(
 /// VertexSnap) for the whole image on every piece: with SplitIntoPieces every piece has points
 /// to sample, which the request cannot tell apart from a later piece of the default mode (that
 /// then reads the image without using it).
-inline void RequestWholeGrayImage(vtkInformation* requestInfo, vtkInformation* imageInfo)
+inline void RequestWholeGrayImage(vtkInformation* imageInfo)
 {
-  RequestWholeImageOnFirstPiece(requestInfo, imageInfo, true);
+  RequestWholeImage(imageInfo);
 }
 
 /// Field array of a tree or mesh that is a piece of a larger image's (SplitIntoPieces).

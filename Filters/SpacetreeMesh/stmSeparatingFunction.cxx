@@ -73,10 +73,9 @@ int stmSeparatingFunction::FillInputPortInformation(int port, vtkInformation* in
 }
 
 int stmSeparatingFunction::ComputeInputUpdateExtent(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector*)
 {
-  stmPieces::RequestWholeGrayImage(
-    outputVector->GetInformationObject(0), inputVector[1]->GetInformationObject(0));
+  stmPieces::RequestWholeGrayImage(inputVector[1]->GetInformationObject(0));
   return 1;
 }
 

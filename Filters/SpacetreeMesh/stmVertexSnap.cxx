@@ -192,8 +192,7 @@ int stmVertexSnap::RequestUpdateExtent(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   const int result = this->Superclass::RequestUpdateExtent(request, inputVector, outputVector);
-  stmPieces::RequestWholeGrayImage(
-    outputVector->GetInformationObject(0), inputVector[1]->GetInformationObject(0));
+  stmPieces::RequestWholeGrayImage(inputVector[1]->GetInformationObject(0));
   return result;
 }
 
