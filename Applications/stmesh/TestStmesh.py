@@ -3631,6 +3631,25 @@ def case_degenerate_memory(c):
     check(code == 1 and "can hold even compressed" in err, "the .nii.gz was not refused: " + err)
 
 
+def run_case(case, work, make_context, test_prefix="stmesh."):
+    """Runs case_<case> (dots as underscores) of the calling script in a fresh work folder;
+    returns the exit code."""
+    function = sys.modules["__main__"].__dict__.get("case_" + case.replace(".", "_"))
+    if function is None:
+        print("unknown case %s" % case, file=sys.stderr)
+        return 2
+    if os.path.isdir(work):
+        shutil.rmtree(work)
+    os.makedirs(work)
+    try:
+        function(make_context())
+    except CaseFailed as failure:
+        print("FAILED: %s" % failure, file=sys.stderr)
+        return 1
+    print("PASSED: %s%s" % (test_prefix, case))
+    return 0
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--stmesh", required=True)
@@ -3639,24 +3658,10 @@ def main():
     parser.add_argument("--work", required=True)
     parser.add_argument("case")
     arguments = parser.parse_args()
-
-    function = globals().get("case_" + arguments.case.replace(".", "_"))
-    if function is None:
-        print("unknown case %s" % arguments.case, file=sys.stderr)
-        return 2
     if not os.path.exists(arguments.aal):
         print("%s is missing (Debian package mricron-data)" % arguments.aal, file=sys.stderr)
         return 1
-    if os.path.isdir(arguments.work):
-        shutil.rmtree(arguments.work)
-    os.makedirs(arguments.work)
-    try:
-        function(Context(arguments))
-    except CaseFailed as failure:
-        print("FAILED: %s" % failure, file=sys.stderr)
-        return 1
-    print("PASSED: stmesh.%s" % arguments.case)
-    return 0
+    return run_case(arguments.case, arguments.work, lambda: Context(arguments))
 
 
 if __name__ == "__main__":

@@ -39,6 +39,7 @@
 #include "stmVertexSnap.h"
 #include "stmeshErrors.h"
 #include "stmeshImageInput.h"
+#include "stmeshParallel.h"
 #include "stmeshText.h"
 
 #include "vtkAlgorithm.h"
@@ -82,8 +83,10 @@
 #include "vtkUnstructuredGridWriter.h"
 #include "vtkVariant.h"
 #include "vtkVersion.h"
+#include "vtkXMLPUnstructuredGridWriter.h"
 #include "vtkXMLPolyDataWriter.h"
 #include "vtkXMLUnstructuredGridWriter.h"
+#include "vtkXMLWriter.h"
 
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -114,6 +117,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -132,16 +136,22 @@ using stmesh::Errors;
 using stmesh::Failure;
 using stmesh::FileName;
 using stmesh::FindImageFormat;
+using stmesh::GatherOnFirstRank;
 using stmesh::GiB;
 using stmesh::ImageFormatInfo;
 using stmesh::ImageInfo;
 using stmesh::ImageRole;
 using stmesh::ImageValues;
+using stmesh::LaunchEnvironment;
+using stmesh::ParallelRun;
+using stmesh::ReadLaunchEnvironment;
 using stmesh::SupportedInputExtensions;
 using stmesh::ThrowIfFailed;
 using stmesh::ToLower;
 using stmesh::Trim;
 using stmesh::Watch;
+using stmesh::WithGlobalIds;
+using stmesh::WithoutGhostCells;
 // Debian package mricron-data: the AAL atlas, a 181 x 217 x 181 label image with 116 regions.
 const char* const DefaultInput = "/usr/share/mricron/templates/aal.nii.gz";
 
@@ -173,6 +183,8 @@ const char* const UsageText =
               [--smooth-iterations N] [--smooth-method taubin|laplacian]
               [--stop-after spacetree|balance|tessellate|snap|cut|smooth] [--threads N]
               [--summary FILE.json] [--compressor lz4|zlib|none] [--interfaces FILE.vtp]
+              [--mpi]
+       mpiexec -n P stmesh [OPTIONS] INPUT -o OUTPUT.pvtu
        stmesh -h|--help
        stmesh --version
 
@@ -197,7 +209,12 @@ Arguments:
                         (FEBio 4.0, a SolidDomain and a placeholder material per material;
                         solids only), .exo or .e (Exodus II, an element block per material
                         and cell type; solids only). Default: the input's base name with .vtu (.vtp for a
-                        surface), in the current directory.
+                        surface), in the current directory. .pvtu (VTK XML in pieces, one
+                        per MPI rank: OUTPUT.pvtu and OUTPUT/OUTPUT_R.vtu) for a run under MPI
+                        (see --mpi), with the point arrays GlobalPointIds and vtkGhostType (a
+                        point shared by pieces belongs to the lowest rank) and the cell arrays
+                        GlobalCellIds and ProcessId. A single-file output under MPI is gathered
+                        on rank 0, the pieces' shared points merged.
   --msh-format F        ascii (the default, Gmsh's) or binary, for a .msh output.
   --report DIR          also write a visual quality report into DIR (made if needed): the
                         summary (summary.json), histograms of the minimum dihedral angle and of
@@ -385,6 +402,18 @@ Arguments:
                         (no tested voxel centre, all or 1000 of each component, lies in a cell
                         of M). The background (0) is listed only when the mesh has it, and the
                         printed line's counts leave it out.
+  --mpi                 start MPI even without a launcher that announces itself (Open MPI's,
+                        MPICH's or a PMIx mpiexec are recognised; a .pvtu output starts MPI
+                        too). With P > 1 ranks every rank reads the image, meshes its share of
+                        the root cells with one root cell of ghosts beyond it and drops the
+                        ghosts; the pieces are the one-rank mesh cell for cell up to the cut,
+                        and the smoothing holds the points of the ghost cells, so that pieces
+                        meet point on point but smooth less near their borders. Each rank uses
+                        the machine's cores divided by the ranks on it unless --threads or
+                        VTK_SMP_MAX_THREADS says otherwise. Not with --grading or
+                        --output-mode surface; --report and --interfaces need a single-file
+                        output. Rank 0 prints the table of its own piece and each rank's time,
+                        cells and peak memory.
   -h, --help            show this help and exit.
   --version             show the version and exit.
 
@@ -437,6 +466,7 @@ std::string AbsolutePath(const std::string& path)
 enum class MeshFormat
 {
   XMLUnstructuredGrid,
+  PartitionedXML, // .pvtu: a piece per MPI rank (stmeshParallel.h)
   LegacyVTK,
   XMLPolyData, // the cut's surface only
   Gmsh,        // .msh, 4.1
@@ -456,6 +486,11 @@ bool IsFiniteElementFormat(MeshFormat format)
 bool FindMeshFormat(const std::string& path, MeshFormat& format)
 {
   const std::string lower = ToLower(FileName(path));
+  if (lower.size() > 5 && EndsWith(lower, ".pvtu"))
+  {
+    format = MeshFormat::PartitionedXML;
+    return true;
+  }
   if (lower.size() > 4 && EndsWith(lower, ".vtu"))
   {
     format = MeshFormat::XMLUnstructuredGrid;
@@ -668,6 +703,7 @@ struct Options
   bool LabelsGiven = false;
   bool RefineThinParts = true; // --thin-parts refine
   bool ThinPartsGiven = false;
+  bool Mpi = false; // --mpi: start MPI without a launcher that announces itself
 
   /// Whether the run reaches the snap stage (it may still skip it: --snap none), the cut stage
   /// and the smooth stage; whether the smooth stage does anything; whether the run writes the
@@ -1254,6 +1290,11 @@ Options ParseCommandLine(int argc, char* argv[])
       options.ShowVersion = true;
       continue;
     }
+    if (argument == "--mpi")
+    {
+      options.Mpi = true;
+      continue;
+    }
 
     // Options with a value: "--name value" or "--name=value" ("-o value" only).
     std::string name = argument;
@@ -1610,8 +1651,8 @@ Options ParseCommandLine(int argc, char* argv[])
   MeshFormat format = MeshFormat::XMLUnstructuredGrid;
   const char* const extensions = options.WritesSurface()
     ? "use .vtp (VTK XML polydata) or .vtk (legacy VTK) for --output-mode surface"
-    : "use .vtu (VTK XML), .vtk (legacy VTK), .msh (Gmsh 4.1), .mesh (Medit), .inp (Abaqus), "
-      ".feb (FEBio 4.0) or .exo (Exodus II)";
+    : "use .vtu (VTK XML), .pvtu (VTK XML, a piece per MPI rank), .vtk (legacy VTK), .msh "
+      "(Gmsh 4.1), .mesh (Medit), .inp (Abaqus), .feb (FEBio 4.0) or .exo (Exodus II)";
   if (!options.Output.empty() && !FindMeshFormat(options.Output, format))
   {
     throw UsageError("output '" + options.Output + "' has an unsupported extension; " + extensions);
@@ -1629,6 +1670,13 @@ Options ParseCommandLine(int argc, char* argv[])
                      "several labels one material (Material 1); give --materials separate "
                      "(every label its own material) or one label with --labels");
   }
+  if (format == MeshFormat::PartitionedXML &&
+    (!options.ReportDirectory.empty() || !options.Interfaces.empty()))
+  {
+    throw UsageError(std::string(options.ReportDirectory.empty() ? "--interfaces" : "--report") +
+      " needs the whole mesh, but a .pvtu output is written in pieces; give a single-file output "
+      "such as -o mesh.vtu (under MPI, rank 0 gathers the pieces into it)");
+  }
   if (!options.ReportDirectory.empty() && options.WritesSurface())
   {
     throw UsageError("--report needs a volume mesh, but --output-mode surface writes the cut's "
@@ -1639,7 +1687,7 @@ Options ParseCommandLine(int argc, char* argv[])
     throw UsageError("--msh-format applies to a .msh output (-o FILE.msh)");
   }
   if (!options.Output.empty() && options.WritesSurface() &&
-    format == MeshFormat::XMLUnstructuredGrid)
+    (format == MeshFormat::XMLUnstructuredGrid || format == MeshFormat::PartitionedXML))
   {
     throw UsageError("output '" + options.Output +
       "': --output-mode surface writes a surface (polydata), not an unstructured grid; " +
@@ -1858,13 +1906,6 @@ double SecondsSince(Clock::time_point start)
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-double TimedUpdate(vtkAlgorithm* algorithm)
-{
-  const Clock::time_point start = Clock::now();
-  algorithm->Update();
-  return SecondsSince(start);
-}
-
 //------------------------------------------------------------------------------------------------
 // Threads.
 
@@ -1909,6 +1950,22 @@ ThreadSetup SetUpThreads(int requestedThreads)
   setup.Backend = vtkSMPTools::GetBackend() ? vtkSMPTools::GetBackend() : "unknown";
   setup.Threads = vtkSMPTools::GetEstimatedNumberOfThreads();
   return setup;
+}
+
+/// The threads of each rank: those given, else with several ranks on this machine its cores
+/// shared between them (VTK_SMP_MAX_THREADS still wins over that share), else 0 (every core).
+int ThreadsPerRank(int requestedThreads, int ranks)
+{
+  const char* maxThreadsFromEnvironment = std::getenv("VTK_SMP_MAX_THREADS");
+  if (requestedThreads > 0 || ranks < 2 ||
+    (maxThreadsFromEnvironment && *maxThreadsFromEnvironment))
+  {
+    return requestedThreads;
+  }
+  const LaunchEnvironment launch = ReadLaunchEnvironment();
+  const int ranksHere = launch.RanksOnThisNode > 0 ? launch.RanksOnThisNode : ranks;
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return std::max(1, cores / ranksHere);
 }
 
 //------------------------------------------------------------------------------------------------
@@ -2067,12 +2124,16 @@ vtkSmartPointer<vtkImageData> MergeLabels(
 
 /// Runs one filter on input port 0 and returns a copy of its output (a vtkUnstructuredGrid, or
 /// the cut's surface as a vtkPolyData); adds its wall time to the report.
-vtkSmartPointer<vtkPointSet> RunFilter(
-  vtkAlgorithm* filter, vtkDataObject* input, const std::string& context, StageReport& report)
+/// Runs filter on input; piece k of n asks the filter for that piece of its output (the
+/// spacetree stage under MPI, stmImageToSpacetree::SplitIntoPieces).
+vtkSmartPointer<vtkPointSet> RunFilter(vtkAlgorithm* filter, vtkDataObject* input,
+  const std::string& context, StageReport& report, int piece = 0, int pieces = 1)
 {
   Watch(filter);
   filter->SetInputDataObject(0, input);
-  report.Seconds += TimedUpdate(filter);
+  const Clock::time_point start = Clock::now();
+  filter->UpdatePiece(piece, pieces, 0);
+  report.Seconds += SecondsSince(start);
   ThrowIfFailed(context);
   vtkPointSet* output = vtkPointSet::SafeDownCast(filter->GetOutputDataObject(0));
   if (!output)
@@ -2089,10 +2150,10 @@ vtkSmartPointer<vtkPointSet> RunFilter(
 }
 
 vtkSmartPointer<vtkUnstructuredGrid> RunStage(vtkAlgorithm* filter, vtkDataObject* input,
-  const std::string& context, StageReport& report, bool isSpacetree)
+  const std::string& context, StageReport& report, bool isSpacetree, int piece = 0, int pieces = 1)
 {
   vtkSmartPointer<vtkUnstructuredGrid> copy =
-    vtkUnstructuredGrid::SafeDownCast(RunFilter(filter, input, context, report));
+    vtkUnstructuredGrid::SafeDownCast(RunFilter(filter, input, context, report, piece, pieces));
   if (!copy)
   {
     throw Failure(context + ": the filter produced no unstructured grid");
@@ -2374,15 +2435,9 @@ long long FileSize(const std::string& path)
   return stat(path.c_str(), &info) == 0 ? static_cast<long long>(info.st_size) : -1;
 }
 
-/// Writes a mesh with an XML writer (vtkXMLUnstructuredGridWriter or vtkXMLPolyDataWriter).
-template <class Writer>
-int WriteXML(vtkDataObject* mesh, const std::string& path, const std::string& compressor,
-  unsigned long& errorCode)
+/// The settings of every XML writer of stmesh's output.
+void ConfigureXMLWriter(vtkXMLWriter* writer, const std::string& compressor)
 {
-  vtkNew<Writer> writer;
-  Watch(writer);
-  writer->SetInputData(mesh);
-  writer->SetFileName(path.c_str());
   // Inline binary, never appended: Debian 12's libexpat fails on appended-mode files.
   writer->SetDataModeToBinary();
   // The writer compresses and base64-encodes on one thread, so the compressor sets the write
@@ -2406,6 +2461,18 @@ int WriteXML(vtkDataObject* mesh, const std::string& path, const std::string& co
   writer->SetBlockSize(1 << 20);
   // 64-bit headers lift the 4 GiB limit on one array.
   writer->SetHeaderTypeToUInt64();
+}
+
+/// Writes a mesh with an XML writer (vtkXMLUnstructuredGridWriter or vtkXMLPolyDataWriter).
+template <class Writer>
+int WriteXML(vtkDataObject* mesh, const std::string& path, const std::string& compressor,
+  unsigned long& errorCode)
+{
+  vtkNew<Writer> writer;
+  Watch(writer);
+  writer->SetInputData(mesh);
+  writer->SetFileName(path.c_str());
+  ConfigureXMLWriter(writer, compressor);
   const int written = writer->Write();
   errorCode = writer->GetErrorCode();
   return written;
@@ -2507,6 +2574,17 @@ StageReport WriteInterfaces(vtkPointSet* mesh, const Options& options, bool twoD
   return report;
 }
 
+/// The write stage's table entry: the file's size and name.
+void DescribeWrittenFile(const std::string& path, StageReport& report)
+{
+  RecordResources(report);
+  std::ostringstream description;
+  description << std::fixed << std::setprecision(1)
+              << static_cast<double>(report.FileBytes) / (1024.0 * 1024.0) << " MiB "
+              << FileName(path);
+  report.Description = description.str();
+}
+
 /// Writes the mesh (a vtkUnstructuredGrid, or the cut's surface as a vtkPolyData).
 void WriteMesh(vtkPointSet* mesh, const std::string& path, MeshFormat format,
   const std::string& compressor, bool binaryMsh, StageReport& report)
@@ -2532,6 +2610,8 @@ void WriteMesh(vtkPointSet* mesh, const std::string& path, MeshFormat format,
     case MeshFormat::XMLPolyData:
       written = WriteXML<vtkXMLPolyDataWriter>(mesh, temporary.GetPath(), compressor, errorCode);
       break;
+    case MeshFormat::PartitionedXML:
+      throw Failure(context + ": a .pvtu is written in pieces (WritePieces)");
     case MeshFormat::LegacyVTK:
       written = surface
         ? WriteLegacy<vtkPolyDataWriter>(mesh, temporary.GetPath(), errorCode)
@@ -2581,12 +2661,43 @@ void WriteMesh(vtkPointSet* mesh, const std::string& path, MeshFormat format,
   }
   temporary.Commit();
   report.Seconds = SecondsSince(start);
-  RecordResources(report);
-  std::ostringstream description;
-  description << std::fixed << std::setprecision(1)
-              << static_cast<double>(report.FileBytes) / (1024.0 * 1024.0) << " MiB "
-              << FileName(path);
-  report.Description = description.str();
+  DescribeWrittenFile(path, report);
+}
+
+/// Writes this rank's piece of a .pvtu: the pieces go to a folder named after the file
+/// (mesh.pvtu: mesh/mesh_0.vtu, mesh/mesh_1.vtu, ...), each written by its rank, and rank 0
+/// writes mesh.pvtu. Not through a temporary file: the ranks write side by side.
+void WritePieces(vtkPointSet* mesh, const std::string& path, const std::string& compressor,
+  const ParallelRun& parallel, StageReport& report)
+{
+  const std::string context = "writing '" + path + "'";
+  const Clock::time_point start = Clock::now();
+  vtkNew<vtkXMLPUnstructuredGridWriter> writer;
+  Watch(writer);
+  writer->SetInputData(mesh);
+  writer->SetFileName(path.c_str());
+  ConfigureXMLWriter(writer, compressor);
+  writer->SetController(parallel.GetController());
+  writer->SetNumberOfPieces(parallel.Ranks());
+  writer->SetStartPiece(parallel.Rank());
+  writer->SetEndPiece(parallel.Rank());
+  writer->SetUseSubdirectory(true);
+  const int written = writer->Write();
+  ThrowIfFailed(context);
+  if (!written || writer->GetErrorCode() != 0)
+  {
+    throw Failure(context + ": the writer failed (disk full or I/O error?)");
+  }
+  const std::string stem = path.substr(0, path.size() - 5); // without ".pvtu"
+  const std::string piece =
+    stem + "/" + FileName(stem) + "_" + std::to_string(parallel.Rank()) + ".vtu";
+  report.FileBytes = FileSize(piece);
+  if (report.FileBytes <= 0)
+  {
+    throw Failure(context + ": the piece '" + piece + "' is missing or empty");
+  }
+  report.Seconds = SecondsSince(start);
+  DescribeWrittenFile(piece, report);
 }
 
 //------------------------------------------------------------------------------------------------
@@ -3195,6 +3306,15 @@ struct StructureReport
   double Seconds = 0.0;
 };
 
+/// What each rank tells rank 0 once its piece is meshed.
+struct RankFigures
+{
+  double Seconds = 0.0;
+  long long Cells = 0; // its own cells, without ghosts
+  long long Points = 0;
+  double PeakRssMiB = 0.0;
+};
+
 struct RunSummary
 {
   MeshQuality Quality;
@@ -3211,6 +3331,8 @@ struct RunSummary
   std::string MaterialKey;
   std::map<long long, long long> CellsPerMaterial;
   LevelTable Levels;
+  int Ranks = 1;
+  std::vector<RankFigures> RankTable; // rank 0's list of every rank, with several ranks
 };
 
 void WriteSummary(const std::string& path, const Options& options, const RunSummary& summary)
@@ -3430,6 +3552,21 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
     json << "null,\n";
   }
   json << "  \"total_seconds\": " << std::setprecision(6) << summary.TotalSeconds << ",\n";
+  json << "  \"ranks\": " << summary.Ranks << ",\n";
+  if (!summary.RankTable.empty())
+  {
+    // Each rank's meshing, until its piece was gathered or written.
+    json << "  \"rank_figures\": [";
+    for (std::size_t rank = 0; rank < summary.RankTable.size(); ++rank)
+    {
+      const RankFigures& figures = summary.RankTable[rank];
+      json << (rank ? ",\n    " : "\n    ") << "{\"seconds\": " << std::setprecision(6)
+           << figures.Seconds << ", \"cells\": " << figures.Cells
+           << ", \"points\": " << figures.Points << ", \"peak_rss_mib\": " << std::setprecision(3)
+           << figures.PeakRssMiB << "}";
+    }
+    json << "\n  ],\n";
+  }
   json << "  \"peak_rss_mib\": " << std::setprecision(3) << PeakRssMiB() << ",\n";
   json << "  " << JsonString(summary.MaterialKey) << ": {";
   bool first = true;
@@ -4687,7 +4824,137 @@ void WriteReport(vtkPointSet* mesh, const std::string& output, MeshFormat format
             << report.Seconds << " s)" << std::defaultfloat << '\n';
 }
 
-int Run(const Options& options)
+//------------------------------------------------------------------------------------------------
+// Several MPI ranks (stmeshParallel.h): the figures of all pieces on rank 0.
+
+std::vector<RankFigures> GatherRankFigures(const RankFigures& mine, const ParallelRun& parallel)
+{
+  std::vector<RankFigures> all;
+  for (const std::vector<double>& values : parallel.GatherOnFirstRank({ mine.Seconds,
+         static_cast<double>(mine.Cells), static_cast<double>(mine.Points), mine.PeakRssMiB }))
+  {
+    all.push_back({ values[0], static_cast<long long>(values[1]), static_cast<long long>(values[2]),
+      values[3] });
+  }
+  return all;
+}
+
+void PrintRankTable(const std::vector<RankFigures>& ranks)
+{
+  std::cout << "ranks:   " << ranks.size()
+            << " MPI ranks; each rank's meshing (before the gather or write), its own cells:\n";
+  for (std::size_t rank = 0; rank < ranks.size(); ++rank)
+  {
+    char line[160];
+    std::snprintf(line, sizeof(line),
+      "  rank %-4zu %9.3f s %12lld cells %12lld points %10.1f MiB\n", rank, ranks[rank].Seconds,
+      ranks[rank].Cells, ranks[rank].Points, ranks[rank].PeakRssMiB);
+    std::cout << line;
+  }
+}
+
+/// The sum over all ranks of a map per rank, on rank 0 (the other ranks keep their own).
+template <class Value>
+std::map<long long, Value> SumOnFirstRank(
+  const std::map<long long, Value>& mine, const ParallelRun& parallel)
+{
+  std::vector<double> values;
+  for (const auto& entry : mine)
+  {
+    values.push_back(static_cast<double>(entry.first));
+    values.push_back(static_cast<double>(entry.second));
+  }
+  const std::vector<std::vector<double>> perRank = parallel.GatherOnFirstRank(values);
+  if (parallel.Rank() != 0)
+  {
+    return mine;
+  }
+  std::map<long long, Value> sum;
+  for (const std::vector<double>& rankValues : perRank)
+  {
+    for (std::size_t i = 0; i + 1 < rankValues.size(); i += 2)
+    {
+      sum[static_cast<long long>(rankValues[i])] += static_cast<Value>(rankValues[i + 1]);
+    }
+  }
+  return sum;
+}
+
+/// The quality of the pieces together, on rank 0 (the other ranks keep their own).
+MeshQuality CombineQuality(const MeshQuality& mine, const ParallelRun& parallel)
+{
+  const std::vector<std::vector<double>> perRank =
+    parallel.GatherOnFirstRank({ mine.Measured ? 1.0 : 0.0, static_cast<double>(mine.Cells),
+      mine.WorstCondition, mine.SmallestDihedral, static_cast<double>(mine.InvertedCells) });
+  MeshQuality combined;
+  combined.VolumePerMaterial = SumOnFirstRank(mine.VolumePerMaterial, parallel);
+  if (parallel.Rank() != 0)
+  {
+    return mine;
+  }
+  for (const std::vector<double>& values : perRank)
+  {
+    if (values[0] == 0.0)
+    {
+      continue; // an empty piece
+    }
+    combined.Measured = true;
+    combined.Cells += static_cast<long long>(values[1]);
+    combined.WorstCondition = std::max(combined.WorstCondition, values[2]);
+    combined.SmallestDihedral = std::min(combined.SmallestDihedral, values[3]);
+    combined.InvertedCells += static_cast<long long>(values[4]);
+  }
+  return combined;
+}
+
+void PrintQuality(const MeshQuality& quality, bool twoDimensional)
+{
+  std::cout << "quality: worst condition number " << std::fixed << std::setprecision(3)
+            << quality.WorstCondition << ", smallest "
+            << (twoDimensional ? "angle " : "dihedral angle ") << std::setprecision(2)
+            << quality.SmallestDihedral << " degrees, " << quality.InvertedCells
+            << " inverted cells; " << (twoDimensional ? "area" : "volume") << " per material";
+  for (const auto& entry : quality.VolumePerMaterial)
+  {
+    // One decimal for voxel-sized units; significant digits for spacings such as 1e-6 or 1e6,
+    // where one decimal would print 0.0 or 21 digits.
+    const double magnitude = std::abs(entry.second);
+    const bool fixedFits = magnitude == 0.0 || (magnitude >= 0.1 && magnitude < 1e7);
+    std::cout << ' ' << entry.first << ": ";
+    if (fixedFits)
+    {
+      std::cout << std::fixed << std::setprecision(1) << entry.second;
+    }
+    else
+    {
+      std::cout << std::defaultfloat << std::setprecision(4) << entry.second;
+    }
+  }
+  std::cout << std::defaultfloat << '\n';
+}
+
+/// The checks of the options that need the whole image on one rank.
+void CheckOptionsForRanks(const Options& options, int ranks)
+{
+  if (ranks < 2)
+  {
+    return;
+  }
+  const std::string several = "with " + std::to_string(ranks) + " MPI ranks";
+  if (options.Grading > 0.0)
+  {
+    throw UsageError("--grading cannot be used " + several +
+      ": a graded spacetree reaches farther than the one root cell of ghosts each rank meshes "
+      "beyond its piece");
+  }
+  if (options.WritesSurface())
+  {
+    throw UsageError(
+      "--output-mode surface cannot be used " + several + "; write the volume mesh (the default)");
+  }
+}
+
+int Run(const Options& options, const ParallelRun& parallel)
 {
   RunSummary summary;
   summary.MinorFaultsAtStart = CurrentResourceUsage().MinorPageFaults;
@@ -4766,13 +5033,21 @@ int Run(const Options& options)
   {
     throw Failure("the summary and the output are the same file '" + output + "'");
   }
-  summary.Threads = SetUpThreads(options.Threads);
+  CheckOptionsForRanks(options, parallel.Ranks());
+  summary.Ranks = parallel.Ranks();
+  summary.Threads = SetUpThreads(ThreadsPerRank(options.Threads, parallel.Ranks()));
   WarnAboutIgnoredCutOptions(options);
 
   std::cout << "input:   " << input << '\n';
   std::cout << "output:  " << output << '\n';
   std::cout << "threads: " << summary.Threads.Threads << " (" << summary.Threads.Backend
-            << " backend)\n";
+            << " backend)" << (parallel.Ranks() > 1 ? " per rank" : "") << '\n';
+  if (parallel.Ranks() > 1)
+  {
+    std::cout << "ranks:   " << parallel.Ranks()
+              << " MPI ranks, each meshing its root cells with one root cell of ghosts; the "
+                 "table shows rank 0's piece\n";
+  }
   std::cout.flush();
 
   const Clock::time_point start = Clock::now();
@@ -4789,7 +5064,8 @@ int Run(const Options& options)
   summary.Stages.push_back(readReport);
   // The structure report needs the (merged) labels after the meshing; a surface has none.
   ReportImage reportImage;
-  if (!options.WritesSurface())
+  const bool inPieces = meshFormat == MeshFormat::PartitionedXML;
+  if (!options.WritesSurface() && !inPieces && parallel.Rank() == 0)
   {
     reportImage = MakeReportImage(image, summary.Image);
   }
@@ -4800,7 +5076,9 @@ int Run(const Options& options)
   {
     vtkNew<stmImageToSpacetree> spacetree;
     ConfigureSpacetree(spacetree, options, image, summary.Image);
-    grid = RunStage(spacetree, image, "building the spacetree", spacetreeReport, true);
+    spacetree->SetSplitIntoPieces(parallel.Ranks() > 1);
+    grid = RunStage(spacetree, image, "building the spacetree", spacetreeReport, true,
+      parallel.Rank(), parallel.Ranks());
     spacetreeReport.ThinVoxels = static_cast<long long>(spacetree->GetNumberOfThinVoxels());
     if (spacetree->GetNumberOfThinVoxels() > 0)
     {
@@ -4957,6 +5235,41 @@ int Run(const Options& options)
     summary.Stages.push_back(smoothReport);
   }
 
+  if (parallel.Ranks() > 1)
+  {
+    // A piece's ghost cells copy its neighbours' cells, held in place by the smoothing: they
+    // are not part of the output.
+    mesh = WithoutGhostCells(mesh);
+    RankFigures figures;
+    figures.Seconds = SecondsSince(start); // before the first exchange waits for the others
+    figures.Cells = static_cast<long long>(mesh->GetNumberOfCells());
+    figures.Points = static_cast<long long>(mesh->GetNumberOfPoints());
+    figures.PeakRssMiB = PeakRssMiB();
+    if (parallel.Sum(figures.Cells) == 0)
+    {
+      throw Failure("no rank meshed a cell: the body of interest is empty");
+    }
+    summary.RankTable = GatherRankFigures(figures, parallel);
+    if (!inPieces)
+    {
+      StageReport gatherReport;
+      gatherReport.Name = "gather";
+      const Clock::time_point gatherStart = Clock::now();
+      mesh = GatherOnFirstRank(mesh);
+      gatherReport.Seconds = SecondsSince(gatherStart);
+      gatherReport.Cells = static_cast<long long>(mesh->GetNumberOfCells());
+      gatherReport.Points = static_cast<long long>(mesh->GetNumberOfPoints());
+      gatherReport.Description = std::to_string(gatherReport.Cells) + " cells, " +
+        std::to_string(gatherReport.Points) + " points on rank 0";
+      RecordResources(gatherReport);
+      summary.Stages.push_back(gatherReport);
+      if (parallel.Rank() != 0)
+      {
+        return 0;
+      }
+    }
+  }
+
   StageReport writeReport;
   writeReport.Name = "write";
   // Leaving out the background is part of the write stage.
@@ -4970,9 +5283,19 @@ int Run(const Options& options)
   {
     labelTable->WriteFieldData(mesh->GetFieldData());
   }
-  const double preparation = SecondsSince(writeStart);
-  WriteMesh(mesh, output, meshFormat, options.Compressor, options.BinaryMsh, writeReport);
-  writeReport.Seconds += preparation;
+  if (inPieces)
+  {
+    mesh = WithGlobalIds(mesh, parallel);
+    const double preparation = SecondsSince(writeStart);
+    WritePieces(mesh, output, options.Compressor, parallel, writeReport);
+    writeReport.Seconds += preparation;
+  }
+  else
+  {
+    const double preparation = SecondsSince(writeStart);
+    WriteMesh(mesh, output, meshFormat, options.Compressor, options.BinaryMsh, writeReport);
+    writeReport.Seconds += preparation;
+  }
   summary.Stages.push_back(writeReport);
   if (!options.Interfaces.empty())
   {
@@ -4982,36 +5305,32 @@ int Run(const Options& options)
 
   summary.MaterialKey = MaterialCountKey(mesh, options, twoDimensional);
   summary.CellsPerMaterial = CountCellsPerMaterial(mesh);
+  if (inPieces)
+  {
+    summary.CellsPerMaterial = SumOnFirstRank(summary.CellsPerMaterial, parallel);
+  }
 
   PrintTable(summary.Stages, summary.TotalSeconds);
+  if (summary.RankTable.size() > 1)
+  {
+    PrintRankTable(summary.RankTable);
+  }
   // Measured after the timing: it is a report on the output, not a stage of the meshing.
   summary.Quality = MeasureMeshQuality(mesh);
+  if (inPieces)
+  {
+    summary.Quality = CombineQuality(summary.Quality, parallel);
+  }
   if (summary.Quality.Measured)
   {
-    std::cout << "quality: worst condition number " << std::fixed << std::setprecision(3)
-              << summary.Quality.WorstCondition << ", smallest "
-              << (twoDimensional ? "angle " : "dihedral angle ") << std::setprecision(2)
-              << summary.Quality.SmallestDihedral << " degrees, " << summary.Quality.InvertedCells
-              << " inverted cells; " << (twoDimensional ? "area" : "volume") << " per material";
-    for (const auto& entry : summary.Quality.VolumePerMaterial)
-    {
-      // One decimal for voxel-sized units; significant digits for spacings such as 1e-6 or 1e6,
-      // where one decimal would print 0.0 or 21 digits.
-      const double magnitude = std::abs(entry.second);
-      const bool fixedFits = magnitude == 0.0 || (magnitude >= 0.1 && magnitude < 1e7);
-      std::cout << ' ' << entry.first << ": ";
-      if (fixedFits)
-      {
-        std::cout << std::fixed << std::setprecision(1) << entry.second;
-      }
-      else
-      {
-        std::cout << std::defaultfloat << std::setprecision(4) << entry.second;
-      }
-    }
-    std::cout << std::defaultfloat << '\n';
+    PrintQuality(summary.Quality, twoDimensional);
   }
-  if (!options.WritesSurface())
+  if (inPieces)
+  {
+    std::cout << "structure: not checked for a mesh in pieces; write one file (such as "
+                 "-o mesh.vtu) for the report of lost components\n";
+  }
+  if (!options.WritesSurface() && !inPieces)
   {
     const Clock::time_point reportStart = Clock::now();
     summary.Structure = MakeStructureReport(mesh, reportImage, options);
@@ -5026,7 +5345,7 @@ int Run(const Options& options)
   {
     WriteReport(mesh, output, meshFormat, options, summary);
   }
-  if (!options.SummaryPath.empty())
+  if (!options.SummaryPath.empty() && parallel.Rank() == 0)
   {
     WriteSummary(options.SummaryPath, options, summary);
     std::cout << "summary: " << options.SummaryPath << '\n';
@@ -5034,25 +5353,57 @@ int Run(const Options& options)
   return 0;
 }
 
-void PrintErrorLines(const std::string& message)
+/// Prints the message, each line an "stmesh: error:" line; with several ranks, on rank 0 for
+/// a mistake on the command line (every rank finds it) and with the rank's number otherwise.
+void PrintErrorLines(const std::string& message, const ParallelRun& parallel, bool sameOnEveryRank)
 {
+  if (parallel.Ranks() > 1 && sameOnEveryRank && parallel.Rank() != 0)
+  {
+    return;
+  }
+  const std::string prefix = parallel.Ranks() > 1 && !sameOnEveryRank
+    ? "stmesh: error: rank " + std::to_string(parallel.Rank()) + ": "
+    : "stmesh: error: ";
   std::istringstream lines(message);
   std::string line;
   bool printed = false;
   while (std::getline(lines, line))
   {
-    std::cerr << "stmesh: error: " << line << '\n';
+    std::cerr << prefix << line << '\n';
     printed = true;
   }
   if (!printed)
   {
-    std::cerr << "stmesh: error: unknown error\n";
+    std::cerr << prefix << "unknown error\n";
   }
+}
+
+/// The exit status of a failed run; with several ranks the others may wait for this one in an
+/// exchange, so all of them end here.
+int Failed(int status, ParallelRun& parallel)
+{
+  if (parallel.Ranks() > 1)
+  {
+    parallel.Abort(status);
+  }
+  return status;
+}
+
+/// MPI is started under an MPI launcher, with --mpi, and for a .pvtu output (written by
+/// vtkXMLPUnstructuredGridWriter with MPI's controller, also by a single rank).
+bool NeedsMPI(const Options& options)
+{
+  MeshFormat format;
+  return options.Mpi || ReadLaunchEnvironment().Ranks > 0 ||
+    (FindMeshFormat(options.Output, format) && format == MeshFormat::PartitionedXML);
 }
 } // namespace
 
 int main(int argc, char* argv[])
 {
+  // Before MPI starts, a command-line mistake is printed by the launcher's rank 0 only.
+  const LaunchEnvironment launch = ReadLaunchEnvironment();
+  ParallelRun parallel;
   try
   {
     stmesh::InstallErrorCapture();
@@ -5073,30 +5424,42 @@ int main(int argc, char* argv[])
                 << vtkVersion::GetVTKVersion() << '\n';
       return 0;
     }
-    const int status = Run(options);
+    if (NeedsMPI(options))
+    {
+      parallel.Start(&argc, &argv);
+      if (parallel.Rank() != 0)
+      {
+        std::cout.setstate(std::ios::badbit); // rank 0 prints the run's table
+      }
+    }
+    const int status = Run(options, parallel);
     std::cout.flush();
     return status;
   }
   catch (const UsageError& error)
   {
-    PrintErrorLines(error.what());
-    std::cerr << "Try 'stmesh --help' for more information.\n";
+    if (launch.Rank == 0 && parallel.Rank() == 0)
+    {
+      PrintErrorLines(error.what(), parallel, true);
+      std::cerr << "Try 'stmesh --help' for more information.\n";
+    }
     return 2;
   }
   catch (const std::bad_alloc&)
   {
     PrintErrorLines("out of memory (try a larger --max-cell-size, fewer --labels or a higher "
-                    "--balance level)");
-    return 1;
+                    "--balance level)",
+      parallel, false);
+    return Failed(1, parallel);
   }
   catch (const std::exception& error)
   {
-    PrintErrorLines(error.what());
-    return 1;
+    PrintErrorLines(error.what(), parallel, false);
+    return Failed(1, parallel);
   }
   catch (...)
   {
-    PrintErrorLines("unexpected internal error");
-    return 1;
+    PrintErrorLines("unexpected internal error", parallel, false);
+    return Failed(1, parallel);
   }
 }

@@ -1,0 +1,341 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "stmeshParallel.h"
+
+#include "stmeshErrors.h"
+
+#include "vtkAggregateDataSetFilter.h"
+#include "vtkCellData.h"
+#include "vtkCommunicator.h"
+#include "vtkDataSetAttributes.h"
+#include "vtkGenerateGlobalIds.h"
+#include "vtkGeometryFilter.h"
+#include "vtkIdTypeArray.h"
+#include "vtkIntArray.h"
+#include "vtkMPIController.h"
+#include "vtkNew.h"
+#include "vtkPointData.h"
+#include "vtkPointSet.h"
+#include "vtkPolyData.h"
+#include "vtkRemoveGhosts.h"
+#include "vtkUnsignedCharArray.h"
+#include "vtk_mpi.h"
+
+#include <cstdlib>
+#include <iostream>
+#include <numeric>
+#include <string>
+#include <unordered_map>
+
+namespace stmesh
+{
+namespace
+{
+int EnvironmentInteger(const char* name)
+{
+  const char* text = std::getenv(name);
+  if (!text || !*text)
+  {
+    return -1;
+  }
+  char* end = nullptr;
+  const long value = std::strtol(text, &end, 10);
+  return (*end == '\0' && value >= 0 && value < (1L << 30)) ? static_cast<int>(value) : -1;
+}
+
+/// Where each rank's values go in a gathered buffer, from the ranks' value counts.
+struct GatherLayout
+{
+  template <class Number>
+  explicit GatherLayout(const std::vector<Number>& lengths)
+  {
+    for (const Number length : lengths)
+    {
+      this->Counts.push_back(static_cast<vtkIdType>(length));
+      this->Offsets.push_back(this->Total);
+      this->Total += this->Counts.back();
+    }
+  }
+  std::vector<vtkIdType> Counts;
+  std::vector<vtkIdType> Offsets;
+  vtkIdType Total = 0;
+};
+
+/// The output of a filter run on mesh, as a copy that outlives the filter.
+vtkSmartPointer<vtkPointSet> RunOn(vtkAlgorithm* filter, vtkPointSet* mesh, const char* context)
+{
+  Watch(filter);
+  filter->SetInputDataObject(0, mesh);
+  filter->Update();
+  ThrowIfFailed(context);
+  vtkPointSet* output = vtkPointSet::SafeDownCast(filter->GetOutputDataObject(0));
+  if (!output)
+  {
+    throw Failure(std::string(context) + ": the filter produced no mesh");
+  }
+  vtkSmartPointer<vtkPointSet> copy = vtkSmartPointer<vtkPointSet>::Take(output->NewInstance());
+  copy->ShallowCopy(output);
+  return copy;
+}
+} // namespace
+
+LaunchEnvironment ReadLaunchEnvironment()
+{
+  LaunchEnvironment launch;
+  // Open MPI's mpiexec, then MPICH's Hydra and Slurm's PMI, then PMIx launchers.
+  const char* const sizeNames[] = { "OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE" };
+  const char* const rankNames[] = { "OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK" };
+  const char* const localSizeNames[] = { "OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS",
+    "PMIX_LOCAL_SIZE" };
+  for (int launcher = 0; launcher < 3; ++launcher)
+  {
+    const int ranks = EnvironmentInteger(sizeNames[launcher]);
+    const int rank = EnvironmentInteger(rankNames[launcher]);
+    if (ranks > 0 && rank >= 0 && rank < ranks)
+    {
+      launch.Ranks = ranks;
+      launch.Rank = rank;
+      launch.RanksOnThisNode = EnvironmentInteger(localSizeNames[launcher]);
+      break;
+    }
+  }
+  return launch;
+}
+
+ParallelRun::~ParallelRun()
+{
+  if (this->Controller)
+  {
+    this->Controller->Finalize();
+    vtkMultiProcessController::SetGlobalController(nullptr);
+  }
+}
+
+void ParallelRun::Start(int* argc, char*** argv)
+{
+  auto controller = vtkSmartPointer<vtkMPIController>::New();
+  controller->Initialize(argc, argv);
+  vtkMultiProcessController::SetGlobalController(controller);
+  this->Controller = controller;
+  this->RankValue = controller->GetLocalProcessId();
+  this->RanksValue = controller->GetNumberOfProcesses();
+}
+
+vtkMultiProcessController* ParallelRun::GetController() const
+{
+  return this->Controller;
+}
+
+void ParallelRun::Abort(int status)
+{
+  std::cout.flush();
+  std::cerr.flush();
+  MPI_Abort(MPI_COMM_WORLD, status);
+  std::exit(status); // not reached: MPI_Abort ends the process
+}
+
+long long ParallelRun::Sum(long long value) const
+{
+  long long sum = value;
+  if (this->Controller)
+  {
+    this->Controller->AllReduce(&value, &sum, 1, vtkCommunicator::SUM_OP);
+  }
+  return sum;
+}
+
+double ParallelRun::Max(double value) const
+{
+  double result = value;
+  if (this->Controller)
+  {
+    this->Controller->AllReduce(&value, &result, 1, vtkCommunicator::MAX_OP);
+  }
+  return result;
+}
+
+double ParallelRun::Min(double value) const
+{
+  double result = value;
+  if (this->Controller)
+  {
+    this->Controller->AllReduce(&value, &result, 1, vtkCommunicator::MIN_OP);
+  }
+  return result;
+}
+
+long long ParallelRun::ExclusiveSum(long long value) const
+{
+  const std::vector<long long> all = this->AllGather({ value });
+  return std::accumulate(all.begin(), all.begin() + this->RankValue, 0LL);
+}
+
+std::vector<long long> ParallelRun::AllGather(const std::vector<long long>& values) const
+{
+  if (!this->Controller)
+  {
+    return values;
+  }
+  const int ranks = this->RanksValue;
+  const long long length = static_cast<long long>(values.size());
+  std::vector<long long> lengths(ranks);
+  this->Controller->AllGather(&length, lengths.data(), 1);
+  GatherLayout layout(lengths); // not const: VTK takes the counts as vtkIdType*
+  std::vector<long long> all(static_cast<std::size_t>(layout.Total) + 1);
+  this->Controller->AllGatherV(values.data(), all.data(), static_cast<vtkIdType>(values.size()),
+    layout.Counts.data(), layout.Offsets.data());
+  all.resize(static_cast<std::size_t>(layout.Total));
+  return all;
+}
+
+std::vector<std::vector<double>> ParallelRun::GatherOnFirstRank(
+  const std::vector<double>& values) const
+{
+  if (!this->Controller)
+  {
+    return { values };
+  }
+  const int ranks = this->RanksValue;
+  const double length = static_cast<double>(values.size());
+  std::vector<double> lengths(ranks);
+  this->Controller->Gather(&length, lengths.data(), 1, 0);
+  GatherLayout layout(lengths); // not const: VTK takes the counts as vtkIdType*
+  std::vector<double> received(static_cast<std::size_t>(layout.Total) + 1);
+  this->Controller->GatherV(values.data(), received.data(), static_cast<vtkIdType>(values.size()),
+    layout.Counts.data(), layout.Offsets.data(), 0);
+  std::vector<std::vector<double>> perRank;
+  if (this->RankValue == 0)
+  {
+    for (int rank = 0; rank < ranks; ++rank)
+    {
+      const auto first = received.begin() + layout.Offsets[rank];
+      perRank.emplace_back(first, first + layout.Counts[rank]);
+    }
+  }
+  return perRank;
+}
+
+vtkSmartPointer<vtkPointSet> WithoutGhostCells(vtkPointSet* mesh)
+{
+  vtkNew<vtkRemoveGhosts> removeGhosts;
+  return RunOn(removeGhosts, mesh, "removing the ghost cells");
+}
+
+vtkSmartPointer<vtkPointSet> GatherOnFirstRank(vtkPointSet* mesh)
+{
+  vtkNew<vtkAggregateDataSetFilter> aggregate;
+  aggregate->SetNumberOfTargetProcesses(1);
+  aggregate->MergePointsOn();
+  return RunOn(aggregate, mesh, "gathering the pieces on rank 0");
+}
+
+vtkSmartPointer<vtkPointSet> WithGlobalIds(vtkPointSet* mesh, const ParallelRun& parallel)
+{
+  // Only the points on a piece's boundary can be shared. vtkGenerateGlobalIds matches them
+  // between the ranks (the whole mesh through it takes longer than the meshing); the others are
+  // numbered in rank order.
+  vtkNew<vtkGeometryFilter> surface;
+  surface->PassThroughPointIdsOn();
+  vtkSmartPointer<vtkPointSet> boundary = RunOn(surface, mesh, "finding the pieces' borders");
+  vtkIdTypeArray* meshPointOfBoundary = vtkIdTypeArray::SafeDownCast(
+    boundary->GetPointData()->GetArray(surface->GetOriginalPointIdsName()));
+  if (!meshPointOfBoundary && boundary->GetNumberOfPoints() > 0)
+  {
+    throw Failure("finding the pieces' borders: vtkGeometryFilter gave no point ids");
+  }
+  vtkNew<vtkPolyData> boundaryPoints;
+  boundaryPoints->SetPoints(boundary->GetPoints());
+  vtkNew<vtkGenerateGlobalIds> match;
+  match->SetController(parallel.GetController());
+  match->SetTolerance(0.0); // shared points are equal bit for bit
+  vtkSmartPointer<vtkPointSet> matched =
+    RunOn(match, boundaryPoints, "matching the points the pieces share");
+  vtkIdTypeArray* sharedKey = vtkIdTypeArray::SafeDownCast(matched->GetPointData()->GetGlobalIds());
+  vtkUnsignedCharArray* boundaryGhosts = matched->GetPointData()->GetGhostArray();
+  const vtkIdType numberOfBoundaryPoints = matched->GetNumberOfPoints();
+  if (numberOfBoundaryPoints > 0 && (!sharedKey || !boundaryGhosts))
+  {
+    throw Failure("matching the points the pieces share: vtkGenerateGlobalIds gave no ids");
+  }
+
+  const vtkIdType numberOfPoints = mesh->GetNumberOfPoints();
+  vtkNew<vtkUnsignedCharArray> pointGhosts;
+  pointGhosts->SetName(vtkDataSetAttributes::GhostArrayName());
+  pointGhosts->SetNumberOfValues(numberOfPoints);
+  pointGhosts->FillValue(0);
+  for (vtkIdType b = 0; b < numberOfBoundaryPoints; ++b)
+  {
+    if (boundaryGhosts->GetValue(b) & vtkDataSetAttributes::DUPLICATEPOINT)
+    {
+      pointGhosts->SetValue(meshPointOfBoundary->GetValue(b), vtkDataSetAttributes::DUPLICATEPOINT);
+    }
+  }
+  vtkIdType ownedPoints = 0;
+  for (vtkIdType p = 0; p < numberOfPoints; ++p)
+  {
+    ownedPoints += pointGhosts->GetValue(p) == 0;
+  }
+  const long long pointOffset = parallel.ExclusiveSum(ownedPoints);
+  vtkNew<vtkIdTypeArray> globalPointIds;
+  globalPointIds->SetName("GlobalPointIds");
+  globalPointIds->SetNumberOfValues(numberOfPoints);
+  vtkIdType next = pointOffset;
+  for (vtkIdType p = 0; p < numberOfPoints; ++p)
+  {
+    globalPointIds->SetValue(p, pointGhosts->GetValue(p) == 0 ? next++ : -1);
+  }
+
+  // A shared point's id is its owner's: every rank tells the others (key, id) of the shared
+  // points it owns.
+  std::vector<long long> ownedKeysAndIds;
+  for (vtkIdType b = 0; b < numberOfBoundaryPoints; ++b)
+  {
+    const vtkIdType p = meshPointOfBoundary->GetValue(b);
+    if (pointGhosts->GetValue(p) == 0)
+    {
+      ownedKeysAndIds.push_back(sharedKey->GetValue(b));
+      ownedKeysAndIds.push_back(globalPointIds->GetValue(p));
+    }
+  }
+  const std::vector<long long> allKeysAndIds = parallel.AllGather(ownedKeysAndIds);
+  std::unordered_map<long long, long long> idOfKey;
+  idOfKey.reserve(allKeysAndIds.size() / 2);
+  for (std::size_t i = 0; i + 1 < allKeysAndIds.size(); i += 2)
+  {
+    idOfKey.emplace(allKeysAndIds[i], allKeysAndIds[i + 1]);
+  }
+  for (vtkIdType b = 0; b < numberOfBoundaryPoints; ++b)
+  {
+    const vtkIdType p = meshPointOfBoundary->GetValue(b);
+    if (pointGhosts->GetValue(p) != 0)
+    {
+      const auto owner = idOfKey.find(sharedKey->GetValue(b));
+      if (owner == idOfKey.end())
+      {
+        throw Failure("numbering the points globally: a shared point has no owner");
+      }
+      globalPointIds->SetValue(p, owner->second);
+    }
+  }
+
+  const vtkIdType numberOfCells = mesh->GetNumberOfCells();
+  const long long cellOffset = parallel.ExclusiveSum(numberOfCells);
+  vtkNew<vtkIdTypeArray> globalCellIds;
+  globalCellIds->SetName("GlobalCellIds");
+  globalCellIds->SetNumberOfValues(numberOfCells);
+  std::iota(globalCellIds->GetPointer(0), globalCellIds->GetPointer(0) + numberOfCells,
+    static_cast<vtkIdType>(cellOffset));
+  vtkNew<vtkIntArray> processIds;
+  processIds->SetName("ProcessId");
+  processIds->SetNumberOfValues(numberOfCells);
+  processIds->FillValue(parallel.Rank());
+
+  vtkSmartPointer<vtkPointSet> numbered = vtkSmartPointer<vtkPointSet>::Take(mesh->NewInstance());
+  numbered->ShallowCopy(mesh);
+  numbered->GetPointData()->SetGlobalIds(globalPointIds);
+  numbered->GetPointData()->AddArray(pointGhosts);
+  numbered->GetCellData()->SetGlobalIds(globalCellIds);
+  numbered->GetCellData()->AddArray(processIds);
+  return numbered;
+}
+
+} // namespace stmesh
