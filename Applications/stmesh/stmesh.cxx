@@ -212,8 +212,8 @@ Arguments:
                         surface), in the current directory. .pvtu (VTK XML in pieces, one
                         per MPI rank: OUTPUT.pvtu and OUTPUT/OUTPUT_R.vtu) for a run under MPI
                         (see --mpi), with the point arrays GlobalPointIds and vtkGhostType (a
-                        point shared by pieces belongs to the lowest rank) and the cell arrays
-                        GlobalCellIds and ProcessId. A single-file output under MPI is gathered
+                        point shared by pieces belongs to the lowest rank) and the cell array
+                        ProcessId. A single-file output under MPI is gathered
                         on rank 0, the pieces' shared points merged.
   --msh-format F        ascii (the default, Gmsh's) or binary, for a .msh output.
   --report DIR          also write a visual quality report into DIR (made if needed): the

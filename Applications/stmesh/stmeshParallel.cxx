@@ -4,11 +4,12 @@
 #include "stmeshErrors.h"
 
 #include "vtkAggregateDataSetFilter.h"
+#include "vtkCellArray.h"
+#include "vtkCellArrayIterator.h"
 #include "vtkCellData.h"
 #include "vtkCommunicator.h"
 #include "vtkDataSetAttributes.h"
 #include "vtkGenerateGlobalIds.h"
-#include "vtkGeometryFilter.h"
 #include "vtkIdTypeArray.h"
 #include "vtkIntArray.h"
 #include "vtkMPIController.h"
@@ -18,6 +19,7 @@
 #include "vtkPolyData.h"
 #include "vtkRemoveGhosts.h"
 #include "vtkUnsignedCharArray.h"
+#include "vtkUnstructuredGrid.h"
 #include "vtk_mpi.h"
 
 #include <cstdlib>
@@ -30,6 +32,10 @@ namespace stmesh
 {
 namespace
 {
+/// The point array WithoutGhostCells leaves for WithGlobalIds: 1 where a point of the piece's
+/// own cells also belonged to a ghost cell.
+const char* const PieceBorderName = "stmeshPieceBorder";
+
 int EnvironmentInteger(const char* name)
 {
   const char* text = std::getenv(name);
@@ -216,34 +222,74 @@ std::vector<std::vector<double>> ParallelRun::GatherOnFirstRank(
 
 vtkSmartPointer<vtkPointSet> WithoutGhostCells(vtkPointSet* mesh)
 {
+  // A point that another piece can have is on the border between this piece's cells and its
+  // ghost cells: the neighbour's cells at such a point are this piece's ghost cells there.
+  vtkUnsignedCharArray* cellGhosts = mesh->GetCellData()->GetGhostArray();
+  vtkNew<vtkUnsignedCharArray> border;
+  border->SetName(PieceBorderName);
+  border->SetNumberOfValues(mesh->GetNumberOfPoints());
+  border->FillValue(0);
+  vtkUnstructuredGrid* grid = vtkUnstructuredGrid::SafeDownCast(mesh);
+  if (cellGhosts && grid)
+  {
+    constexpr unsigned char InOwnedCell = 1;
+    constexpr unsigned char InGhostCell = 2;
+    vtkIdType size = 0;
+    const vtkIdType* ids = nullptr;
+    auto cells = vtk::TakeSmartPointer(grid->GetCells()->NewIterator());
+    for (cells->GoToFirstCell(); !cells->IsDoneWithTraversal(); cells->GoToNextCell())
+    {
+      cells->GetCurrentCell(size, ids);
+      const unsigned char role =
+        cellGhosts->GetValue(cells->GetCurrentCellId()) ? InGhostCell : InOwnedCell;
+      for (vtkIdType corner = 0; corner < size; ++corner)
+      {
+        border->SetValue(ids[corner], border->GetValue(ids[corner]) | role);
+      }
+    }
+    for (vtkIdType p = 0; p < border->GetNumberOfValues(); ++p)
+    {
+      border->SetValue(p, border->GetValue(p) == (InOwnedCell | InGhostCell));
+    }
+  }
+  vtkSmartPointer<vtkPointSet> marked = vtkSmartPointer<vtkPointSet>::Take(mesh->NewInstance());
+  marked->ShallowCopy(mesh);
+  marked->GetPointData()->AddArray(border);
   vtkNew<vtkRemoveGhosts> removeGhosts;
-  return RunOn(removeGhosts, mesh, "removing the ghost cells");
+  return RunOn(removeGhosts, marked, "removing the ghost cells");
 }
 
 vtkSmartPointer<vtkPointSet> GatherOnFirstRank(vtkPointSet* mesh)
 {
+  vtkSmartPointer<vtkPointSet> piece = vtkSmartPointer<vtkPointSet>::Take(mesh->NewInstance());
+  piece->ShallowCopy(mesh);
+  piece->GetPointData()->RemoveArray(PieceBorderName);
   vtkNew<vtkAggregateDataSetFilter> aggregate;
   aggregate->SetNumberOfTargetProcesses(1);
   aggregate->MergePointsOn();
-  return RunOn(aggregate, mesh, "gathering the pieces on rank 0");
+  return RunOn(aggregate, piece, "gathering the pieces on rank 0");
 }
 
 vtkSmartPointer<vtkPointSet> WithGlobalIds(vtkPointSet* mesh, const ParallelRun& parallel)
 {
-  // Only the points on a piece's boundary can be shared. vtkGenerateGlobalIds matches them
-  // between the ranks (the whole mesh through it takes longer than the meshing); the others are
-  // numbered in rank order.
-  vtkNew<vtkGeometryFilter> surface;
-  surface->PassThroughPointIdsOn();
-  vtkSmartPointer<vtkPointSet> boundary = RunOn(surface, mesh, "finding the pieces' borders");
-  vtkIdTypeArray* meshPointOfBoundary = vtkIdTypeArray::SafeDownCast(
-    boundary->GetPointData()->GetArray(surface->GetOriginalPointIdsName()));
-  if (!meshPointOfBoundary && boundary->GetNumberOfPoints() > 0)
+  // Only the points on a piece's border can be shared. vtkGenerateGlobalIds matches them between
+  // the ranks (run on the whole mesh it takes longer than the meshing); the others are numbered
+  // in rank order.
+  vtkUnsignedCharArray* border =
+    vtkUnsignedCharArray::SafeDownCast(mesh->GetPointData()->GetArray(PieceBorderName));
+  vtkNew<vtkIdTypeArray> meshPointOfBoundary;
+  vtkNew<vtkPoints> borderPoints;
+  borderPoints->SetDataType(mesh->GetPoints() ? mesh->GetPoints()->GetDataType() : VTK_DOUBLE);
+  for (vtkIdType p = 0; border && p < border->GetNumberOfValues(); ++p)
   {
-    throw Failure("finding the pieces' borders: vtkGeometryFilter gave no point ids");
+    if (border->GetValue(p))
+    {
+      meshPointOfBoundary->InsertNextValue(p);
+      borderPoints->InsertNextPoint(mesh->GetPoint(p));
+    }
   }
   vtkNew<vtkPolyData> boundaryPoints;
-  boundaryPoints->SetPoints(boundary->GetPoints());
+  boundaryPoints->SetPoints(borderPoints);
   vtkNew<vtkGenerateGlobalIds> match;
   match->SetController(parallel.GetController());
   match->SetTolerance(0.0); // shared points are equal bit for bit
@@ -318,12 +364,6 @@ vtkSmartPointer<vtkPointSet> WithGlobalIds(vtkPointSet* mesh, const ParallelRun&
   }
 
   const vtkIdType numberOfCells = mesh->GetNumberOfCells();
-  const long long cellOffset = parallel.ExclusiveSum(numberOfCells);
-  vtkNew<vtkIdTypeArray> globalCellIds;
-  globalCellIds->SetName("GlobalCellIds");
-  globalCellIds->SetNumberOfValues(numberOfCells);
-  std::iota(globalCellIds->GetPointer(0), globalCellIds->GetPointer(0) + numberOfCells,
-    static_cast<vtkIdType>(cellOffset));
   vtkNew<vtkIntArray> processIds;
   processIds->SetName("ProcessId");
   processIds->SetNumberOfValues(numberOfCells);
@@ -331,9 +371,9 @@ vtkSmartPointer<vtkPointSet> WithGlobalIds(vtkPointSet* mesh, const ParallelRun&
 
   vtkSmartPointer<vtkPointSet> numbered = vtkSmartPointer<vtkPointSet>::Take(mesh->NewInstance());
   numbered->ShallowCopy(mesh);
+  numbered->GetPointData()->RemoveArray(PieceBorderName);
   numbered->GetPointData()->SetGlobalIds(globalPointIds);
   numbered->GetPointData()->AddArray(pointGhosts);
-  numbered->GetCellData()->SetGlobalIds(globalCellIds);
   numbered->GetCellData()->AddArray(processIds);
   return numbered;
 }

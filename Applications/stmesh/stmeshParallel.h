@@ -5,7 +5,7 @@
 // stmesh under MPI (issue 11): `mpiexec -n P stmesh image.nii.gz -o mesh.pvtu`. Every rank reads
 // the image, meshes the root cells of its piece (stmImageToSpacetree::SplitIntoPieces, with one
 // root cell of ghosts), drops its ghost cells and then either writes its piece of a .pvtu (global
-// point and cell ids, point ghosts, a ProcessId array; vtkGenerateGlobalIds and
+// point ids, point ghosts, a ProcessId array; vtkGenerateGlobalIds and
 // vtkXMLPUnstructuredGridWriter) or sends it to rank 0, which merges the shared points and writes
 // one file (vtkAggregateDataSetFilter). VTK's own parallel filters do the exchanges.
 
@@ -69,17 +69,18 @@ private:
   void operator=(const ParallelRun&) = delete;
 };
 
-/// The mesh without the cells marked as ghosts (vtkRemoveGhosts).
+/// The mesh without the cells marked as ghosts (vtkRemoveGhosts), with a point array that
+/// tells WithGlobalIds which points other pieces may share.
 vtkSmartPointer<vtkPointSet> WithoutGhostCells(vtkPointSet* mesh);
 
 /// Rank 0 gets the pieces of all ranks as one mesh, their shared points merged; the other ranks
 /// get an empty mesh (vtkAggregateDataSetFilter).
 vtkSmartPointer<vtkPointSet> GatherOnFirstRank(vtkPointSet* mesh);
 
-/// The piece with "GlobalPointIds" and "GlobalCellIds" (0 to the number of points and of cells
-/// of all pieces together, minus 1), point ghosts (vtkGhostType: a point shared by pieces
-/// belongs to the lowest rank that has it) and the cell array "ProcessId". The pieces must not
-/// have ghost cells (WithoutGhostCells).
+/// The piece with "GlobalPointIds" (0 to the number of points of all pieces together, minus 1),
+/// point ghosts (vtkGhostType: a point shared by pieces belongs to the lowest rank that has it)
+/// and the cell array "ProcessId". The pieces come from WithoutGhostCells (a single piece may
+/// come straight from the meshing).
 vtkSmartPointer<vtkPointSet> WithGlobalIds(vtkPointSet* mesh, const ParallelRun& parallel);
 
 } // namespace stmesh
