@@ -35,6 +35,37 @@ def nested_labels(i, j, k):
     return 0
 
 
+def speck_labels(i, j, k):
+    """A ball without thin parts and a single voxel in a far corner, the image's only thin part:
+    in one piece's voxels only."""
+    if (i, j, k) == (52, 44, 36):
+        return 1
+    return 1 if (i - 20) ** 2 + (j - 24) ** 2 + (k - 20) ** 2 <= 196 else 0
+
+
+def write_image(c, name, label, spacing):
+    """A uint8 NIfTI label image of DIMENSIONS voxels of the given spacing."""
+    vtk = T.vtk_modules()
+    image = vtk["vtkImageData"]()
+    image.SetDimensions(*DIMENSIONS)
+    image.SetSpacing(*spacing)
+    image.AllocateScalars(3, 1)  # VTK_UNSIGNED_CHAR
+    scalars = image.GetPointData().GetScalars()
+    index = 0
+    for k in range(DIMENSIONS[2]):
+        for j in range(DIMENSIONS[1]):
+            for i in range(DIMENSIONS[0]):
+                scalars.SetValue(index, label(i, j, k))
+                index += 1
+    errors = []
+    writer = T.watched(vtk["vtkNIFTIImageWriter"](), errors)
+    writer.SetInputData(image)
+    writer.SetFileName(c.path(name))
+    writer.Write()
+    check(not errors, "cannot write %s: %s" % (name, errors))
+    return c.path(name)
+
+
 class MPIContext(T.Context):
     def __init__(self, arguments):
         self.stmesh = arguments.stmesh
@@ -175,9 +206,9 @@ def cell_set(coordinates, cells):
                   for corners, material in cells)
 
 
-def mesh_with_ranks(c, ranks, name, extra):
+def mesh_with_ranks(c, ranks, name, extra, image=None):
     output = c.path(name + ".pvtu")
-    _, out, _ = c.run_ranks(ranks, [c.labels(), "-o", output] + extra)
+    _, out, _ = c.run_ranks(ranks, [image or c.labels(), "-o", output] + extra)
     if ranks > 1:
         check("ranks:   %d MPI ranks" % ranks in out, "no rank table")
         for rank in range(ranks):
@@ -211,6 +242,23 @@ def case_ranks_unsmoothed(c):
                 check(cells_by_coordinates == reference,
                       "%d ranks: %d cells, 1 rank %d; not the same cells" % (
                           ranks, len(cells_by_coordinates), len(reference)))
+
+
+def case_thin_parts(c):
+    # The image's only thin part, a speck, lies in one piece's voxels: the pieces classify the
+    # voxels on the whole image and plan its lattice (down to half a voxel, at a spacing of
+    # 0.3 mm, which halves inexactly), and their cells are the one-rank mesh's.
+    image = write_image(c, "speck.nii", speck_labels, (0.3, 0.3, 0.3))
+    reference = None
+    for ranks in (1, 2, 4):
+        coordinates, cells, _ = mesh_with_ranks(c, ranks, "t%d" % ranks,
+                                                ["--smooth-iterations", "0"], image)
+        cells_by_coordinates = cell_set(coordinates, cells)
+        if reference is None:
+            reference = cells_by_coordinates
+        else:
+            check(cells_by_coordinates == reference,
+                  "%d ranks: not the cells of one rank" % ranks)
 
 
 def case_ranks_default(c):

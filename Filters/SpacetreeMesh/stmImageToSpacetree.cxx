@@ -151,6 +151,14 @@ struct RefinementRequest
   double Grading;
   /// stmImageToSpacetree::ThinPartModes.
   int ThinParts = 0;
+  /// A piece's thin and minority-corner voxels (empty: none), classified on the whole image
+  /// before the crop: a thin part is one by its whole component, which may reach beyond the
+  /// piece's ghost box. WholeThinVoxels decides, as for the whole image, whether the plan
+  /// reaches half a voxel, so that every piece has the whole image's lattice.
+  bool VoxelClassesGiven = false;
+  std::vector<std::uint8_t> ThinVoxels;
+  std::vector<std::uint8_t> MinorityCornerVoxels;
+  std::int64_t WholeThinVoxels = 0;
 };
 
 /// What BuildTree reports besides the tree.
@@ -331,6 +339,67 @@ std::vector<T> CropVoxels(
   return block;
 }
 
+/// The voxels of a material image that are thin parts and those at minority corners (empty
+/// vectors: none), for ThinParts other than NO_THIN_PARTS.
+template <int Dim>
+bool ClassifyVoxels(const stm::MaterialImage<Dim>& image, const RefinementRequest& request,
+  stmSMPExecutor& executor, std::vector<std::uint8_t>& thin,
+  std::vector<std::uint8_t>& minorityCorner, std::string& error)
+{
+  thin.clear();
+  minorityCorner.clear();
+  if (request.ThinParts == stmImageToSpacetree::NO_THIN_PARTS)
+  {
+    return true;
+  }
+  const bool bodyOnly = request.ThinParts == stmImageToSpacetree::THIN_BODY_PARTS;
+  const stm::Status thinStatus = stm::ThinPartVoxels<Dim>(image, bodyOnly, thin, executor);
+  if (!thinStatus.IsOk())
+  {
+    error = thinStatus.GetMessage();
+    return false;
+  }
+  if (std::find(thin.begin(), thin.end(), std::uint8_t{ 1 }) == thin.end())
+  {
+    thin.clear();
+  }
+  // The voxel tests read the whole image: a quarter of the build on the AAL atlas.
+  executor.ReportProgress(0.15);
+  if (executor.ShouldAbort())
+  {
+    return false;
+  }
+  const stm::Status cornerStatus =
+    stm::MinorityCornerVoxels<Dim>(image, bodyOnly, minorityCorner, executor);
+  if (!cornerStatus.IsOk())
+  {
+    error = cornerStatus.GetMessage();
+    return false;
+  }
+  if (std::find(minorityCorner.begin(), minorityCorner.end(), std::uint8_t{ 1 }) ==
+    minorityCorner.end())
+  {
+    minorityCorner.clear();
+  }
+  executor.ReportProgress(0.3);
+  return !executor.ShouldAbort();
+}
+
+/// The material image of a voxel array, its axes in the image's order (2D images skip the
+/// axis of one voxel).
+template <int Dim>
+stm::MaterialImage<Dim> ImageOfVoxels(const std::vector<stm::MaterialIndex>& materials,
+  const int voxelDims[3], const stmSpacetreeGeometry& geometry)
+{
+  stm::MaterialImage<Dim> image;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    image.Dimensions[axis] = voxelDims[geometry.ImageAxes[axis]];
+  }
+  image.Values = materials.data();
+  return image;
+}
+
 template <int Dim>
 bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxelDims[3],
   const PieceLayout* piece, stmSpacetreeGeometry geometry,
@@ -339,14 +408,12 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
 {
   // A piece plans with the whole image's size, so that its root cells are the whole's.
   const int* planVoxelDims = piece ? piece->WholeVoxelDims : voxelDims;
-  stm::MaterialImage<Dim> image;
+  const stm::MaterialImage<Dim> image = ImageOfVoxels<Dim>(materials, voxelDims, geometry);
   stm::LatticeIndex<Dim> planDims;
   for (int axis = 0; axis < Dim; ++axis)
   {
-    image.Dimensions[axis] = voxelDims[geometry.ImageAxes[axis]];
     planDims[axis] = planVoxelDims[geometry.ImageAxes[axis]];
   }
-  image.Values = materials.data();
   stm::RefinementPlanOptions<Dim> planOptions;
   if (!MakePlanOptions<Dim>(request, geometry, planOptions, error))
   {
@@ -359,56 +426,31 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
   }
   // Thin parts: refined to half a voxel on every axis, which the plan must reach.
   std::vector<std::uint8_t> thin;
-  if (request.ThinParts != stmImageToSpacetree::NO_THIN_PARTS)
-  {
-    const stm::Status thinStatus = stm::ThinPartVoxels<Dim>(
-      image, request.ThinParts == stmImageToSpacetree::THIN_BODY_PARTS, thin, executor);
-    if (!thinStatus.IsOk())
-    {
-      error = thinStatus.GetMessage();
-      return false;
-    }
-    report.ThinVoxels = std::count(thin.begin(), thin.end(), std::uint8_t{ 1 });
-    if (report.ThinVoxels == 0)
-    {
-      thin.clear();
-    }
-    // The voxel tests read the whole image: a quarter of the build on the AAL atlas.
-    executor.ReportProgress(0.15);
-    if (executor.ShouldAbort())
-    {
-      return false;
-    }
-  }
   // Voxels at minority corners get leaves of one voxel, or a coarse leaf there could lose its
   // material near the corner, or whole (see stm::MinorityCornerVoxels).
   std::vector<std::uint8_t> minorityCorner;
+  if (request.VoxelClassesGiven)
+  {
+    thin = request.ThinVoxels;
+    minorityCorner = request.MinorityCornerVoxels;
+  }
+  else if (!ClassifyVoxels<Dim>(image, request, executor, thin, minorityCorner, error))
+  {
+    return false;
+  }
+  report.ThinVoxels = std::count(thin.begin(), thin.end(), std::uint8_t{ 1 });
+  report.MinorityCornerVoxels =
+    std::count(minorityCorner.begin(), minorityCorner.end(), std::uint8_t{ 1 });
+  bool refinesThinParts =
+    request.VoxelClassesGiven ? request.WholeThinVoxels > 0 : report.ThinVoxels > 0;
   if (request.ThinParts != stmImageToSpacetree::NO_THIN_PARTS)
   {
-    const stm::Status cornerStatus = stm::MinorityCornerVoxels<Dim>(
-      image, request.ThinParts == stmImageToSpacetree::THIN_BODY_PARTS, minorityCorner, executor);
-    if (!cornerStatus.IsOk())
-    {
-      error = cornerStatus.GetMessage();
-      return false;
-    }
-    report.MinorityCornerVoxels =
-      std::count(minorityCorner.begin(), minorityCorner.end(), std::uint8_t{ 1 });
-    if (report.MinorityCornerVoxels == 0)
-    {
-      minorityCorner.clear();
-    }
-    executor.ReportProgress(0.3);
-    if (executor.ShouldAbort())
-    {
-      return false;
-    }
     executor.StartRemainingProgressAt(0.3);
   }
   auto planLevels = [&](stm::RefinementPlan<Dim>& result)
   {
     planOptions.FinestSize = finest;
-    if (!thin.empty())
+    if (refinesThinParts)
     {
       const double half =
         0.5 * *std::min_element(planOptions.Spacing.begin(), planOptions.Spacing.end());
@@ -416,25 +458,29 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
     }
     return stm::PlanRefinement<Dim>(planDims, planOptions, result);
   };
-  auto latticeCellsOf = [&](const stm::RefinementPlan<Dim>& result)
+  auto latticeCellsOf =
+    [&](const stm::RefinementPlan<Dim>& result, const stm::LatticeIndex<Dim>& dims)
   {
     std::int64_t cells = 1;
     for (int axis = 0; axis < Dim; ++axis)
     {
-      cells *= image.Dimensions[axis] * result.VoxelSubdivision[axis];
+      cells *= dims[axis] * result.VoxelSubdivision[axis];
     }
     return cells;
   };
   stm::RefinementPlan<Dim> plan;
   stm::Status status = planLevels(plan);
-  if (status.IsOk() && !thin.empty() && latticeCellsOf(plan) > MaximumLatticeCells)
+  // Decided on the whole image's size, so that every piece has the whole image's lattice.
+  const std::int64_t wholeLatticeCells = status.IsOk() ? latticeCellsOf(plan, planDims) : 0;
+  if (refinesThinParts && wholeLatticeCells > MaximumLatticeCells)
   {
     report.Warning = "the thin parts (" + std::to_string(report.ThinVoxels) +
       " voxels) are not refined: half-voxel cells would make the lattice too large (" +
-      std::to_string(latticeCellsOf(plan)) + " cells, at most " +
-      std::to_string(MaximumLatticeCells) + "); a cut may lose them";
+      std::to_string(wholeLatticeCells) + " cells, at most " + std::to_string(MaximumLatticeCells) +
+      "); a cut may lose them";
     thin.clear();
     report.ThinVoxels = 0;
+    refinesThinParts = false;
     status = planLevels(plan);
   }
   if (!status.IsOk())
@@ -450,7 +496,7 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
       return false;
     }
   }
-  const std::int64_t latticeCells = latticeCellsOf(plan);
+  const std::int64_t latticeCells = latticeCellsOf(plan, image.Dimensions);
   if (latticeCells > MaximumLatticeCells)
   {
     error = "refinement below the voxel size makes the lattice too large (" +
@@ -797,6 +843,12 @@ int stmImageToSpacetree::RequestUpdateExtent(
   if (!piece.Empty)
   {
     std::copy(piece.WholeExtent, piece.WholeExtent + 6, extent);
+  }
+  // Thin-part refinement needs the whole image: a part is thin by its whole component, which
+  // may reach beyond the ghost box, and whether any voxel of the image is thin decides the
+  // lattice (RequestData classifies the voxels before it crops them).
+  if (!piece.Empty && this->ThinPartRefinement == NO_THIN_PARTS)
+  {
     for (int i = 0; i < piece.Dimension; ++i)
     {
       const int axis = piece.ImageAxes[i];
@@ -1205,6 +1257,38 @@ int stmImageToSpacetree::RequestData(
       geometry.LatticeOffset[i] = static_cast<double>(piece.FirstVoxel[i]);
       geometry.OwnedRootLower[i] = piece.OwnedLower[i] - piece.GhostLower[i];
       geometry.OwnedRootUpper[i] = piece.OwnedUpper[i] - piece.GhostLower[i];
+    }
+    if (request.ThinParts != NO_THIN_PARTS)
+    {
+      // RequestUpdateExtent asked for the whole image: a thin part is one by its whole component.
+      stmSMPExecutor classifier(this);
+      classifier.SetProgressRange(0.25, 0.4);
+      std::vector<std::uint8_t> thin;
+      std::vector<std::uint8_t> minorityCorner;
+      std::string classifyError;
+      const bool classified = geometry.Dimension == 3
+        ? ClassifyVoxels<3>(ImageOfVoxels<3>(materials, voxelDims, geometry), request, classifier,
+            thin, minorityCorner, classifyError)
+        : ClassifyVoxels<2>(ImageOfVoxels<2>(materials, voxelDims, geometry), request, classifier,
+            thin, minorityCorner, classifyError);
+      if (!classified)
+      {
+        if (!this->GetAbortExecute())
+        {
+          vtkErrorMacro("ImageToSpacetree failed: " << classifyError);
+        }
+        return this->GetAbortExecute() ? 1 : 0;
+      }
+      request.VoxelClassesGiven = true;
+      request.WholeThinVoxels = std::count(thin.begin(), thin.end(), std::uint8_t{ 1 });
+      if (!thin.empty())
+      {
+        request.ThinVoxels = CropVoxels(thin, voxelDims, first, count);
+      }
+      if (!minorityCorner.empty())
+      {
+        request.MinorityCornerVoxels = CropVoxels(minorityCorner, voxelDims, first, count);
+      }
     }
     materials = CropVoxels(materials, voxelDims, first, count);
     if (!request.InRegion.empty())

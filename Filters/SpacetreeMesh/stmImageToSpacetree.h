@@ -225,8 +225,9 @@ public:
   /**
    * When the pipeline asks for piece k of n > 1, build only that piece's part of the tree (its
    * box of root cells and a ghost layer of one root cell) instead of the whole tree on piece 0.
-   * Needs the whole image's extent from upstream; Grading is not supported with it. Default
-   * off.
+   * Needs the whole image's extent from upstream; Grading is not supported with it. Each piece
+   * reads the voxels of its ghost box, or with ThinPartRefinement the whole image, whose whole
+   * components decide which parts are thin. Default off.
    */
   vtkSetMacro(SplitIntoPieces, bool);
   vtkGetMacro(SplitIntoPieces, bool);
@@ -241,7 +242,8 @@ protected:
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
   /// Under MPI: the whole image on piece 0, nothing on the others (stmPieces.h); with
-  /// SplitIntoPieces, the voxels of the piece's root cells and its ghost layer.
+  /// SplitIntoPieces, the voxels of the piece's root cells and its ghost layer, or with
+  /// ThinPartRefinement the whole image (thin parts are classified on it before the crop).
   int RequestUpdateExtent(vtkInformation* request, vtkInformationVector** inputVector,
     vtkInformationVector* outputVector) override;
   int RequestData(vtkInformation* request, vtkInformationVector** inputVector,
