@@ -46,17 +46,8 @@ def speck_labels(i, j, k):
 def write_image(c, name, label, spacing):
     """A uint8 NIfTI label image of DIMENSIONS voxels of the given spacing."""
     vtk = T.vtk_modules()
-    image = vtk["vtkImageData"]()
-    image.SetDimensions(*DIMENSIONS)
+    image = T.filled_image(vtk, DIMENSIONS, 3, "labels", label)  # VTK_UNSIGNED_CHAR
     image.SetSpacing(*spacing)
-    image.AllocateScalars(3, 1)  # VTK_UNSIGNED_CHAR
-    scalars = image.GetPointData().GetScalars()
-    index = 0
-    for k in range(DIMENSIONS[2]):
-        for j in range(DIMENSIONS[1]):
-            for i in range(DIMENSIONS[0]):
-                scalars.SetValue(index, label(i, j, k))
-                index += 1
     errors = []
     writer = T.watched(vtk["vtkNIFTIImageWriter"](), errors)
     writer.SetInputData(image)
