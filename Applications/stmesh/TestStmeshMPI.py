@@ -280,6 +280,8 @@ def case_gather(c):
         _, grid, _ = T.read_grid(output)
         check(grid.GetPointData().GetArray("stmeshPieceBorder") is None,
               "a working array is left")
+        check(grid.GetFieldData().GetArray("SpacetreeMeshPiece") is None,
+              "the gathered mesh is marked as a piece")
         points = grid.GetPoints()
         materials = grid.GetCellData().GetArray("Material")
         meshes[ranks] = (grid.GetNumberOfPoints(), sorted(

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "stmeshParallel.h"
 
+#include "stmPieces.h"
 #include "stmeshErrors.h"
 
 #include "vtkAggregateDataSetFilter.h"
@@ -9,6 +10,7 @@
 #include "vtkCellData.h"
 #include "vtkCommunicator.h"
 #include "vtkDataSetAttributes.h"
+#include "vtkFieldData.h"
 #include "vtkGenerateGlobalIds.h"
 #include "vtkIdTypeArray.h"
 #include "vtkIntArray.h"
@@ -272,6 +274,8 @@ vtkSmartPointer<vtkPointSet> GatherOnFirstRank(vtkPointSet* mesh)
   vtkSmartPointer<vtkPointSet> piece = vtkSmartPointer<vtkPointSet>::Take(mesh->NewInstance());
   piece->ShallowCopy(mesh);
   piece->GetPointData()->RemoveArray(PieceBorderName);
+  // The gathered mesh is whole: the later stages must not take it for a piece.
+  piece->GetFieldData()->RemoveArray(stmPieces::PieceMarkerName);
   vtkNew<vtkAggregateDataSetFilter> aggregate;
   aggregate->SetNumberOfTargetProcesses(1);
   aggregate->MergePointsOn();
