@@ -284,6 +284,7 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
   request.Options.VolumeTargetMaterials = originals.empty() ? nullptr : originals.data();
   const std::vector<std::uint8_t> held = GhostCellPoints<Dim>(input, connectivity);
   request.Options.HeldPoints = held.empty() ? nullptr : held.data();
+  request.Options.GhostCells = held.empty() ? nullptr : stmPieces::GhostCellFlags(input);
 
   // The projector: Newton steps onto f = 0 of the implicit function, in the frame. VTK's
   // implicit functions may update a transform when evaluated, so evaluations are serialised.
@@ -357,6 +358,7 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
   std::vector<std::int64_t>().swap(originals);
   request.Options.VolumeTargetMaterials = nullptr;
   request.Options.HeldPoints = nullptr;
+  request.Options.GhostCells = nullptr;
 
   // The output: the input's cells and arrays, the moved points in the input's precision.
   vtkUnstructuredGrid* output = request.Output;

@@ -205,6 +205,10 @@ struct BoundarySmoothOptions
   /// piece's ghost cells, so that adjacent pieces keep their shared points. Held points count
   /// as fixed and are their neighbours' fixed neighbours.
   const std::uint8_t* HeldPoints = nullptr;
+  /// Per cell, non-zero for a copy of another piece's cell (a piece's ghost layer; nullptr:
+  /// none). Its quality enters neither the bounds nor the reported extremes: the layer ends
+  /// where the piece's image ends, and its far cells are cut there as at a false boundary.
+  const std::uint8_t* GhostCells = nullptr;
 };
 
 struct BoundarySmoothStats
@@ -1040,6 +1044,10 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     double largestCosine = -1.0;
     for (std::int64_t c = 0; c < cells; ++c)
     {
+      if (options.GhostCells && options.GhostCells[c])
+      {
+        continue;
+      }
       worst = std::max(worst, this->Shapes[c].Condition);
       largestCosine = std::max(largestCosine, this->Shapes[c].Cosine);
     }

@@ -461,6 +461,40 @@ TYPED_TEST(BoundarySmoothTest, HeldPointsStayWhereTheyAre)
   EXPECT_TRUE(report.IsValid()) << report.Summary();
 }
 
+// A piece's ghost cells (GhostCells) leave the quality bounds and the reported extremes to the
+// other cells: all of them marked leave no extremes at all, half of them no worse ones.
+TYPED_TEST(BoundarySmoothTest, GhostCellsDoNotSetTheBounds)
+{
+  constexpr int D = TypeParam::value;
+  const SmoothMesh<D> input = CutBall<D>(Extent<D>(), 0.35);
+  stm::BoundarySmoothOptions options;
+  SmoothMesh<D> whole = input;
+  const stm::BoundarySmoothStats wholeStats = Smooth<D>(whole, options);
+  ASSERT_GT(wholeStats.WorstConditionBefore, 1.0);
+
+  std::vector<std::uint8_t> allGhosts(static_cast<std::size_t>(input.NumberOfCells()), 1);
+  SmoothMesh<D> ghosts = input;
+  options.GhostCells = allGhosts.data();
+  const stm::BoundarySmoothStats ghostStats = Smooth<D>(ghosts, options);
+  EXPECT_EQ(ghostStats.WorstConditionBefore, 0.0);
+  EXPECT_EQ(ghostStats.MinDihedralBefore, 180.0);
+  EXPECT_EQ(ghostStats.WorstConditionAfter, 0.0);
+
+  std::vector<std::uint8_t> halfGhosts(static_cast<std::size_t>(input.NumberOfCells()), 0);
+  for (std::int64_t c = 0; c < input.NumberOfCells(); ++c)
+  {
+    halfGhosts[c] = input.Points[input.Cells[c * (D + 1)] * D] < input.Centre[0] ? 1 : 0;
+  }
+  SmoothMesh<D> half = input;
+  options.GhostCells = halfGhosts.data();
+  const stm::BoundarySmoothStats halfStats = Smooth<D>(half, options);
+  EXPECT_GT(halfStats.WorstConditionBefore, 1.0);
+  EXPECT_LE(halfStats.WorstConditionBefore, wholeStats.WorstConditionBefore);
+  EXPECT_GE(halfStats.MinDihedralBefore, wholeStats.MinDihedralBefore);
+  const stm::MeshInvariantReport report = Check<D>(half);
+  EXPECT_TRUE(report.IsValid()) << report.Summary();
+}
+
 // A projector onto the sphere (Newton steps, Cut/LevelSetProjection.h) puts every moved surface
 // point on it; most surface points move (the others stay where a move would cost quality).
 TYPED_TEST(BoundarySmoothTest, ProjectorPutsSurfacePointsOntoTheSphere)
