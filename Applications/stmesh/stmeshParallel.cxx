@@ -151,26 +151,6 @@ long long ParallelRun::Sum(long long value) const
   return sum;
 }
 
-double ParallelRun::Max(double value) const
-{
-  double result = value;
-  if (this->Controller)
-  {
-    this->Controller->AllReduce(&value, &result, 1, vtkCommunicator::MAX_OP);
-  }
-  return result;
-}
-
-double ParallelRun::Min(double value) const
-{
-  double result = value;
-  if (this->Controller)
-  {
-    this->Controller->AllReduce(&value, &result, 1, vtkCommunicator::MIN_OP);
-  }
-  return result;
-}
-
 long long ParallelRun::ExclusiveSum(long long value) const
 {
   const std::vector<long long> all = this->AllGather({ value });

@@ -40,7 +40,6 @@ public:
   ~ParallelRun();
 
   void Start(int* argc, char*** argv);
-  bool IsStarted() const { return this->Controller != nullptr; }
   int Rank() const { return this->RankValue; }
   int Ranks() const { return this->RanksValue; }
   vtkMultiProcessController* GetController() const;
@@ -49,10 +48,8 @@ public:
   /// for in an exchange (MPI_Abort).
   [[noreturn]] void Abort(int status);
 
-  /// Over all ranks (every rank gets the result).
+  /// The sum over all ranks (every rank gets it).
   long long Sum(long long value) const;
-  double Max(double value) const;
-  double Min(double value) const;
   /// The sum of value over the ranks before this one.
   long long ExclusiveSum(long long value) const;
   /// Every rank's values, rank by rank, on every rank.
