@@ -15,6 +15,7 @@
 #include "vtkIdTypeArray.h"
 #include "vtkIntArray.h"
 #include "vtkMPIController.h"
+#include "vtkMultiProcessController.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
 #include "vtkPointSet.h"
@@ -259,7 +260,43 @@ vtkSmartPointer<vtkPointSet> GatherOnFirstRank(vtkPointSet* mesh)
   vtkNew<vtkAggregateDataSetFilter> aggregate;
   aggregate->SetNumberOfTargetProcesses(1);
   aggregate->MergePointsOn();
-  return RunOn(aggregate, piece, "gathering the pieces on rank 0");
+  vtkSmartPointer<vtkPointSet> gathered = RunOn(aggregate, piece, "gathering the pieces on rank 0");
+  // vtkAggregateDataSetFilter gives the whole mesh to the rank that had the most points, which
+  // need not be rank 0 (with pieces balanced by cost it was rank 1 of 2, and rank 0 wrote an
+  // empty mesh); that rank sends it on.
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  if (!controller || controller->GetNumberOfProcesses() < 2)
+  {
+    return gathered;
+  }
+  const int rank = controller->GetLocalProcessId();
+  const int ranks = controller->GetNumberOfProcesses();
+  int candidate = gathered->GetNumberOfPoints() > 0 ? rank : ranks;
+  int holder = ranks;
+  controller->AllReduce(&candidate, &holder, 1, vtkCommunicator::MIN_OP);
+  if (holder == 0 || holder == ranks)
+  {
+    return gathered;
+  }
+  constexpr int GatheredMeshTag = 4711;
+  if (rank == holder)
+  {
+    controller->Send(gathered, 0, GatheredMeshTag);
+    return vtkSmartPointer<vtkPointSet>::Take(gathered->NewInstance());
+  }
+  if (rank == 0)
+  {
+    vtkSmartPointer<vtkDataObject> received =
+      vtk::TakeSmartPointer(controller->ReceiveDataObject(holder, GatheredMeshTag));
+    vtkPointSet* mesh = vtkPointSet::SafeDownCast(received);
+    if (!mesh)
+    {
+      throw Failure(
+        "gathering the pieces on rank 0: rank " + std::to_string(holder) + " sent no mesh");
+    }
+    return mesh;
+  }
+  return gathered;
 }
 
 vtkSmartPointer<vtkPointSet> WithGlobalIds(vtkPointSet* mesh, const ParallelRun& parallel)
