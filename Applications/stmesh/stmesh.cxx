@@ -405,7 +405,7 @@ Arguments:
   --mpi                 start MPI even without a launcher that announces itself (Open MPI's,
                         MPICH's or a PMIx mpiexec are recognised; a .pvtu output starts MPI
                         too). With P > 1 ranks every rank reads the image, meshes its share of
-                        the root cells with one root cell of ghosts beyond it and drops the
+                        the root cells with two root cells of ghosts beyond it and drops the
                         ghosts; the pieces are the one-rank mesh cell for cell up to the cut,
                         and the smoothing holds the points of the ghost cells, so that pieces
                         meet point on point but smooth less near their borders. Each rank uses
@@ -4944,7 +4944,7 @@ void CheckOptionsForRanks(const Options& options, int ranks)
   if (options.Grading > 0.0)
   {
     throw UsageError("--grading cannot be used " + several +
-      ": a graded spacetree reaches farther than the one root cell of ghosts each rank meshes "
+      ": a graded spacetree reaches farther than the two root cells of ghosts each rank meshes "
       "beyond its piece");
   }
   if (options.WritesSurface())
@@ -5045,7 +5045,7 @@ int Run(const Options& options, const ParallelRun& parallel)
   if (parallel.Ranks() > 1)
   {
     std::cout << "ranks:   " << parallel.Ranks()
-              << " MPI ranks, each meshing its root cells with one root cell of ghosts; the "
+              << " MPI ranks, each meshing its root cells with two root cells of ghosts; the "
                  "table shows rank 0's piece\n";
   }
   std::cout.flush();

@@ -246,11 +246,28 @@ struct PieceLayout
   long long VoxelCount[3] = { 1, 1, 1 };
 };
 
+/// The material image of a voxel array, its axes in the image's order (2D images skip the
+/// axis of one voxel).
+template <int Dim>
+stm::MaterialImage<Dim> ImageOfVoxels(const std::vector<stm::MaterialIndex>& materials,
+  const int voxelDims[3], const stmSpacetreeGeometry& geometry)
+{
+  stm::MaterialImage<Dim> image;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    image.Dimensions[axis] = voxelDims[geometry.ImageAxes[axis]];
+  }
+  image.Values = materials.data();
+  return image;
+}
+
 /// Lays out piece `piece` of `pieces` of an image of layout.WholeVoxelDims voxels, with the root
-/// cells the whole image's plan gives.
+/// cells the whole image's plan gives; balanced by the cost of the root cells when the whole
+/// image's materials (`wholeImage`, with an executor) are given (stm::RootCellCosts).
 template <int Dim>
 bool LayOutPiece(const RefinementRequest& request, const stmSpacetreeGeometry& geometry, int pieces,
-  int piece, PieceLayout& layout, std::string& error)
+  int piece, const std::vector<stm::MaterialIndex>* wholeImage, stmSMPExecutor* executor,
+  PieceLayout& layout, std::string& error)
 {
   stm::RefinementPlanOptions<Dim> options;
   if (!MakePlanOptions<Dim>(request, geometry, options, error))
@@ -274,7 +291,23 @@ bool LayOutPiece(const RefinementRequest& request, const stmSpacetreeGeometry& g
     layout.RootVoxels[axis] = plan.CellSizes[0][axis] / plan.VoxelSubdivision[axis];
   }
   const stm::LatticeIndex<Dim> rootDims = plan.RootGridDimensions(dims);
-  const stm::RootBox<Dim> owned = stm::PieceRootBox<Dim>(rootDims, pieces, piece);
+  stm::RootBox<Dim> owned;
+  if (wholeImage && executor)
+  {
+    stm::LatticeIndex<Dim> rootVoxels;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      rootVoxels[axis] = layout.RootVoxels[axis];
+    }
+    const std::vector<std::int64_t> costs =
+      stm::RootCellCosts<Dim>(ImageOfVoxels<Dim>(*wholeImage, layout.WholeVoxelDims, geometry),
+        rootVoxels, rootDims, *executor);
+    owned = stm::PieceRootBox<Dim>(rootDims, pieces, piece, costs);
+  }
+  else
+  {
+    owned = stm::PieceRootBox<Dim>(rootDims, pieces, piece);
+  }
   const stm::RootBox<Dim> ghost = stm::GhostRootBox<Dim>(owned, rootDims);
   layout.Empty = owned.IsEmpty();
   for (int axis = 0; axis < Dim && !layout.Empty; ++axis)
@@ -383,21 +416,6 @@ bool ClassifyVoxels(const stm::MaterialImage<Dim>& image, const RefinementReques
   }
   executor.ReportProgress(0.3);
   return !executor.ShouldAbort();
-}
-
-/// The material image of a voxel array, its axes in the image's order (2D images skip the
-/// axis of one voxel).
-template <int Dim>
-stm::MaterialImage<Dim> ImageOfVoxels(const std::vector<stm::MaterialIndex>& materials,
-  const int voxelDims[3], const stmSpacetreeGeometry& geometry)
-{
-  stm::MaterialImage<Dim> image;
-  for (int axis = 0; axis < Dim; ++axis)
-  {
-    image.Dimensions[axis] = voxelDims[geometry.ImageAxes[axis]];
-  }
-  image.Values = materials.data();
-  return image;
 }
 
 template <int Dim>
@@ -596,7 +614,8 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
 /// (inInfo); false with `error` when it cannot.
 bool LayOutRequestedPiece(stmImageToSpacetree* filter, vtkInformation* outInfo,
   vtkInformation* inInfo, bool cellLabels, const double* direction, PieceLayout& piece,
-  std::string& error)
+  std::string& error, const std::vector<stm::MaterialIndex>* wholeImage = nullptr,
+  stmSMPExecutor* executor = nullptr)
 {
   using Pipeline = vtkStreamingDemandDrivenPipeline;
   piece = PieceLayout();
@@ -635,8 +654,9 @@ bool LayOutRequestedPiece(stmImageToSpacetree* filter, vtkInformation* outInfo,
   piece.Dimension = geometry.Dimension;
   std::copy(geometry.ImageAxes, geometry.ImageAxes + 3, piece.ImageAxes);
   const int number = stmPieces::RequestedPiece(outInfo);
-  return geometry.Dimension == 3 ? LayOutPiece<3>(request, geometry, pieces, number, piece, error)
-                                 : LayOutPiece<2>(request, geometry, pieces, number, piece, error);
+  return geometry.Dimension == 3
+    ? LayOutPiece<3>(request, geometry, pieces, number, wholeImage, executor, piece, error)
+    : LayOutPiece<2>(request, geometry, pieces, number, wholeImage, executor, piece, error);
 }
 
 /// Whether the label array selection names a cell array (known before the data arrive).
@@ -1127,7 +1147,7 @@ int stmImageToSpacetree::RequestData(
   }
   if (this->Grading != 0 && splitting)
   {
-    // Grading reaches further than one root cell: the pieces would not match.
+    // Grading reaches further than the ghost layer: the pieces would not match.
     vtkErrorMacro("Grading is not supported with Split Into Pieces.");
     return 0;
   }
@@ -1246,25 +1266,14 @@ int stmImageToSpacetree::RequestData(
   // A piece: its ghost box's voxels only (BuildTree plans it as the whole image).
   if (splitting)
   {
-    long long first[3] = { 0, 0, 0 };
-    int count[3] = { voxelDims[0], voxelDims[1], voxelDims[2] };
     geometry.IsPiece = true;
-    for (int i = 0; i < geometry.Dimension; ++i)
-    {
-      const int axis = geometry.ImageAxes[i];
-      first[axis] = piece.FirstVoxel[i] - static_cast<long long>(geometry.LatticeOffset[i]);
-      count[axis] = static_cast<int>(piece.VoxelCount[i]);
-      geometry.LatticeOffset[i] = static_cast<double>(piece.FirstVoxel[i]);
-      geometry.OwnedRootLower[i] = piece.OwnedLower[i] - piece.GhostLower[i];
-      geometry.OwnedRootUpper[i] = piece.OwnedUpper[i] - piece.GhostLower[i];
-    }
+    std::vector<std::uint8_t> thin;
+    std::vector<std::uint8_t> minorityCorner;
     if (request.ThinParts != NO_THIN_PARTS)
     {
       // RequestUpdateExtent asked for the whole image: a thin part is one by its whole component.
       stmSMPExecutor classifier(this);
       classifier.SetProgressRange(0.25, 0.4);
-      std::vector<std::uint8_t> thin;
-      std::vector<std::uint8_t> minorityCorner;
       std::string classifyError;
       const bool classified = geometry.Dimension == 3
         ? ClassifyVoxels<3>(ImageOfVoxels<3>(materials, voxelDims, geometry), request, classifier,
@@ -1281,14 +1290,49 @@ int stmImageToSpacetree::RequestData(
       }
       request.VoxelClassesGiven = true;
       request.WholeThinVoxels = std::count(thin.begin(), thin.end(), std::uint8_t{ 1 });
-      if (!thin.empty())
+      // With the whole image here, the pieces are balanced by the cells their voxels will make
+      // rather than by their root cells: a cut across the middle of the AAL atlas's longest
+      // axis gave one of two ranks 55 % of the cells. Every rank estimates the same costs, so
+      // the boxes still partition the root grid; the empty pieces are the same.
+      bool whole = true;
+      for (int axis = 0; axis < 3; ++axis)
       {
-        request.ThinVoxels = CropVoxels(thin, voxelDims, first, count);
+        whole = whole && voxelDims[axis] == piece.WholeVoxelDims[axis] &&
+          extent[2 * axis] == piece.WholeExtent[2 * axis];
       }
-      if (!minorityCorner.empty())
+      std::string layoutError;
+      stmSMPExecutor estimator(this);
+      if (whole &&
+        !LayOutRequestedPiece(this, outInfo, inputVector[0]->GetInformationObject(0), cellLabels,
+          direction, piece, layoutError, &materials, &estimator))
       {
-        request.MinorityCornerVoxels = CropVoxels(minorityCorner, voxelDims, first, count);
+        vtkErrorMacro("ImageToSpacetree failed: " << layoutError);
+        return 0;
       }
+      if (piece.Empty)
+      {
+        output->Initialize();
+        return 1;
+      }
+    }
+    long long first[3] = { 0, 0, 0 };
+    int count[3] = { voxelDims[0], voxelDims[1], voxelDims[2] };
+    for (int i = 0; i < geometry.Dimension; ++i)
+    {
+      const int axis = geometry.ImageAxes[i];
+      first[axis] = piece.FirstVoxel[i] - static_cast<long long>(geometry.LatticeOffset[i]);
+      count[axis] = static_cast<int>(piece.VoxelCount[i]);
+      geometry.LatticeOffset[i] = static_cast<double>(piece.FirstVoxel[i]);
+      geometry.OwnedRootLower[i] = piece.OwnedLower[i] - piece.GhostLower[i];
+      geometry.OwnedRootUpper[i] = piece.OwnedUpper[i] - piece.GhostLower[i];
+    }
+    if (!thin.empty())
+    {
+      request.ThinVoxels = CropVoxels(thin, voxelDims, first, count);
+    }
+    if (!minorityCorner.empty())
+    {
+      request.MinorityCornerVoxels = CropVoxels(minorityCorner, voxelDims, first, count);
     }
     materials = CropVoxels(materials, voxelDims, first, count);
     if (!request.InRegion.empty())

@@ -224,10 +224,11 @@ public:
   ///@{
   /**
    * When the pipeline asks for piece k of n > 1, build only that piece's part of the tree (its
-   * box of root cells and a ghost layer of one root cell) instead of the whole tree on piece 0.
+   * box of root cells and a ghost layer of two root cells) instead of the whole tree on piece 0.
    * Needs the whole image's extent from upstream; Grading is not supported with it. Each piece
    * reads the voxels of its ghost box, or with ThinPartRefinement the whole image, whose whole
-   * components decide which parts are thin. Default off.
+   * components decide which parts are thin; with the whole image the boxes are balanced by the
+   * cells their voxels will make (stm::RootCellCosts). Default off.
    */
   vtkSetMacro(SplitIntoPieces, bool);
   vtkGetMacro(SplitIntoPieces, bool);

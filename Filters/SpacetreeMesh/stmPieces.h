@@ -11,7 +11,7 @@
  * quietly. With one piece (a serial run) an empty input stays an error.
  *
  * With stmImageToSpacetree::SplitIntoPieces, piece k builds the root cells of box k of n
- * (stm::PieceRootBox) from its voxels and those of one layer of ghost root cells around it;
+ * (stm::PieceRootBox) from its voxels and those of two layers of ghost root cells around it;
  * the tree and every mesh made of it carry the field array PieceMarkerName and vtkGhostType on
  * the ghost layer's leaves and cells, and the later stages mesh such a piece like a whole image.
  */

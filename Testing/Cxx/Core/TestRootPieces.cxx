@@ -79,7 +79,111 @@ TYPED_TEST(RootPiecesTest, BisectionHalvesTheLongestAxis)
   }
 }
 
-TYPED_TEST(RootPiecesTest, GhostBoxesGrowByOneAndStartEven)
+TYPED_TEST(RootPiecesTest, CostsPartitionTheGridWithTheSameEmptyPieces)
+{
+  constexpr int D = TypeParam::value;
+  for (const stm::LatticeIndex<D>& dims : { UniformExtents<D>(1), UniformExtents<D>(3),
+         FirstExtents<D>({ 7, 2, 5, 3 }), FirstExtents<D>({ 2, 9, 4, 6 }) })
+  {
+    const std::int64_t cells = stm::NumberOfLatticeCells<D>(dims);
+    // Uneven costs, zero in some cells.
+    std::vector<std::int64_t> costs(static_cast<std::size_t>(cells));
+    for (std::int64_t i = 0; i < cells; ++i)
+    {
+      costs[i] = (i * 7919) % 13 < 4 ? 0 : (i * 104729) % 97;
+    }
+    for (int pieces = 1; pieces <= 12; ++pieces)
+    {
+      SCOPED_TRACE("grid " + ToString<D>(dims) + ", " + std::to_string(pieces) + " pieces");
+      std::vector<int> owners(static_cast<std::size_t>(cells), 0);
+      for (int piece = 0; piece < pieces; ++piece)
+      {
+        const stm::RootBox<D> box = stm::PieceRootBox<D>(dims, pieces, piece, costs);
+        ForEachIndex<D>(dims,
+          [&](const stm::LatticeIndex<D>& root)
+          { owners[stm::LinearIndex<D>(root, dims)] += box.Contains(root) ? 1 : 0; });
+        EXPECT_EQ(box.IsEmpty(), stm::PieceRootBox<D>(dims, pieces, piece).IsEmpty());
+      }
+      EXPECT_TRUE(std::all_of(owners.begin(), owners.end(), [](int n) { return n == 1; }))
+        << "a root cell is not in exactly one piece";
+    }
+  }
+}
+
+TYPED_TEST(RootPiecesTest, CostsMoveTheCut)
+{
+  constexpr int D = TypeParam::value;
+  // A row of 10 root cells; the first two cost 10, the others 1 (28 in all). A cut at 1 leaves
+  // the sides 10 and 18, at 2 20 and 8: the cut is at 1 (without costs: at 5).
+  const stm::LatticeIndex<D> row = FirstExtents<D>({ 10, 1, 1, 1 });
+  const std::vector<std::int64_t> rowCosts{ 10, 10, 1, 1, 1, 1, 1, 1, 1, 1 };
+  EXPECT_EQ(stm::PieceRootBox<D>(row, 2, 0, rowCosts).Upper, FirstExtents<D>({ 1, 1, 1, 1 }));
+  EXPECT_EQ(stm::PieceRootBox<D>(row, 2, 1, rowCosts).Lower, FirstExtents<D>({ 1, 0, 0, 0 }));
+  EXPECT_EQ(stm::PieceRootBox<D>(row, 2, 0).Upper[0], 5);
+  // 6 x 4 x 4 ... root cells costing 1, except 7 in the first layer across axis 0: per cross
+  // section the layers along axis 0 cost 7, 1, 1, 1, 1, 1, whose best cut leaves 7 against 5;
+  // across axis 1 (and the later ones alike) the costs halve at 2, so axis 1 is cut there.
+  const stm::LatticeIndex<D> dims = FirstExtents<D>({ 6, 4, 4, 4 });
+  std::vector<std::int64_t> costs(static_cast<std::size_t>(stm::NumberOfLatticeCells<D>(dims)));
+  ForEachIndex<D>(dims,
+    [&](const stm::LatticeIndex<D>& root)
+    { costs[stm::LinearIndex<D>(root, dims)] = root[0] == 0 ? 7 : 1; });
+  const stm::RootBox<D> lower = stm::PieceRootBox<D>(dims, 2, 0, costs);
+  stm::LatticeIndex<D> upperCorner = dims;
+  upperCorner[1] = 2;
+  EXPECT_EQ(lower.Lower, UniformExtents<D>(0));
+  EXPECT_EQ(lower.Upper, upperCorner);
+  EXPECT_EQ(stm::PieceRootBox<D>(dims, 2, 0).Upper[0], 3);
+  // Costs that are all zero, or of the wrong size: the middle of the longest axis.
+  EXPECT_EQ(
+    stm::PieceRootBox<D>(dims, 2, 0, std::vector<std::int64_t>(costs.size(), 0)).Upper[0], 3);
+  EXPECT_EQ(stm::PieceRootBox<D>(dims, 2, 0, std::vector<std::int64_t>(3, 1)).Upper[0], 3);
+}
+
+TEST(RootCellCosts, BoundaryAndBodyVoxels2D)
+{
+  // 8 x 6 voxels, material 1 in x 2..4, y 1..2; root cells of 4 x 4 voxels (2 x 2 of them).
+  // Boundary voxels (the next voxel along x or y differs): (1,1) (1,2) (4,0) (4,1) (4,2) along
+  // x or y, and (2,0) (3,0) (2,2) (3,2) along y. Root (0,0) holds 6 of them and 4 body voxels,
+  // root (1,0) 3 and 2.
+  std::vector<stm::MaterialIndex> values(8 * 6, 0);
+  for (int y = 1; y <= 2; ++y)
+  {
+    for (int x = 2; x <= 4; ++x)
+    {
+      values[y * 8 + x] = 1;
+    }
+  }
+  stm::MaterialImage<2> image;
+  image.Dimensions = { 8, 6 };
+  image.Values = values.data();
+  stm::ThreadPoolExecutor executor(2);
+  const std::vector<std::int64_t> costs =
+    stm::RootCellCosts<2>(image, { 4, 4 }, { 2, 2 }, executor);
+  const std::int64_t boundary = stm::BoundaryVoxelCost, body = stm::BodyVoxelCost;
+  EXPECT_EQ(
+    costs, (std::vector<std::int64_t>{ 6 * boundary + 4 * body, 3 * boundary + 2 * body, 0, 0 }));
+  // Root cells that do not cover the image: no costs.
+  EXPECT_EQ(
+    stm::RootCellCosts<2>(image, { 2, 2 }, { 2, 2 }, executor), std::vector<std::int64_t>(4, 0));
+}
+
+TEST(RootCellCosts, OneVoxel3D)
+{
+  // One voxel of material 2 at (1,1,1) of 4 x 4 x 4; root cells of 2 voxels. It differs from
+  // the next voxels, and (0,1,1), (1,0,1) and (1,1,0) differ from it: all in root (0,0,0).
+  std::vector<stm::MaterialIndex> values(64, 0);
+  values[1 + 4 * (1 + 4 * 1)] = 2;
+  stm::MaterialImage<3> image;
+  image.Dimensions = { 4, 4, 4 };
+  image.Values = values.data();
+  stm::SequentialExecutor executor;
+  std::vector<std::int64_t> expected(8, 0);
+  expected[0] = 4 * stm::BoundaryVoxelCost + stm::BodyVoxelCost;
+  EXPECT_EQ(stm::RootCellCosts<3>(image, { 2, 2, 2 }, { 2, 2, 2 }, executor), expected);
+}
+
+TYPED_TEST(RootPiecesTest, GhostBoxesGrowByTwoAndStartEven)
 {
   constexpr int D = TypeParam::value;
   const stm::LatticeIndex<D> dims = FirstExtents<D>({ 9, 6, 5, 4 });
@@ -99,9 +203,9 @@ TYPED_TEST(RootPiecesTest, GhostBoxesGrowByOneAndStartEven)
         EXPECT_EQ(ghost.Lower[axis] % 2, 0);
         EXPECT_GE(ghost.Lower[axis], 0);
         EXPECT_LE(ghost.Upper[axis], dims[axis]);
-        EXPECT_LE(ghost.Lower[axis], std::max<std::int64_t>(0, owned.Lower[axis] - 1));
-        EXPECT_GE(ghost.Lower[axis], owned.Lower[axis] - 2);
-        EXPECT_EQ(ghost.Upper[axis], std::min(dims[axis], owned.Upper[axis] + 1));
+        EXPECT_LE(ghost.Lower[axis], std::max<std::int64_t>(0, owned.Lower[axis] - 2));
+        EXPECT_GE(ghost.Lower[axis], owned.Lower[axis] - 3);
+        EXPECT_EQ(ghost.Upper[axis], std::min(dims[axis], owned.Upper[axis] + 2));
       }
     }
   }
@@ -209,13 +313,21 @@ void ExpectPiecesReproduceTheWholeMesh(const LabelImage<D>& image, const PieceCa
   ASSERT_EQ(static_cast<std::int64_t>(expected.size()), wholeMesh.GetNumberOfCells());
   ASSERT_GT(stm::NumberOfLatticeCells<D>(rootDims), 2);
 
-  for (int pieces : { 2, 3, 5 })
+  // The boxes halved by root cells and balanced by the image's costs (as the filter does when
+  // it has the whole image).
+  const std::vector<std::int64_t> costs =
+    stm::RootCellCosts<D>(image.View(), rootVoxels, rootDims, executor);
+  for (int run = 0; run < 6; ++run)
   {
+    const int pieces = std::array<int, 3>{ 2, 3, 5 }[run % 3];
+    const bool balanced = run >= 3;
+    SCOPED_TRACE(balanced ? "balanced by costs" : "halved by root cells");
     std::vector<CellKey<D>> together;
     for (int piece = 0; piece < pieces; ++piece)
     {
       SCOPED_TRACE("piece " + std::to_string(piece) + " of " + std::to_string(pieces));
-      const stm::RootBox<D> owned = stm::PieceRootBox<D>(rootDims, pieces, piece);
+      const stm::RootBox<D> owned = balanced ? stm::PieceRootBox<D>(rootDims, pieces, piece, costs)
+                                             : stm::PieceRootBox<D>(rootDims, pieces, piece);
       if (owned.IsEmpty())
       {
         continue;
@@ -305,6 +417,28 @@ TEST_F(RootPiecesMeshTest, PiecesReproduceTheWholeMesh2D)
   {
     SCOPED_TRACE(Describe(c));
     ExpectPiecesReproduceTheWholeMesh<2>(image, c);
+  }
+}
+
+TEST_F(RootPiecesMeshTest, FineLeavesBeyondTheGhostLayer)
+{
+  // One row of four root cells of 8 voxels. Fine leaves in the last one, at its face with the
+  // third, split that root leaf in the whole tree, which puts a hanging node on the face of the
+  // second, a root leaf too. Meshed with root cells 0 and 1 as its own, a piece must see the
+  // fourth root cell's leaves to get that node: a ghost layer of one root cell is not enough.
+  LabelImage<2> image(FirstExtents<2>({ 32, 8 }));
+  image.Set(FirstExtents<2>({ 0, 0 }), 1);
+  for (int y = 0; y < 3; ++y)
+  {
+    image.Set(FirstExtents<2>({ 24, y }), 1);
+  }
+  for (const PieceCase& c : PieceCases)
+  {
+    if (c.MaxCellSize == 8)
+    {
+      SCOPED_TRACE(Describe(c));
+      ExpectPiecesReproduceTheWholeMesh<2>(image, c);
+    }
   }
 }
 
