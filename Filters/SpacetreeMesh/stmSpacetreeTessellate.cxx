@@ -6,6 +6,7 @@
 #include "stmSpacetreeData.h"
 
 #include "Cut/SeparatingFunction.h"
+#include "Spacetree/RootPieces.h"
 #include "Tessellate/SpacetreeTessellation.h"
 
 #include "vtkCellArray.h"
@@ -278,6 +279,36 @@ int RequiredBoundaryLayers(int function, double sigma, const std::array<double, 
   return 0;
 }
 
+/// A piece's leaves beyond the first of its ghost root layers: they give no cells. The owned
+/// cells need only the leaves next to them; the outer layer is there to make those the whole
+/// tree's (stm::GhostRootLayers), and its cells would only cost memory and time in every stage.
+template <int Dim>
+void HideOuterGhostLayer(const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry,
+  std::vector<std::uint8_t>& hidden)
+{
+  const stm::LatticeIndex<Dim>& rootSize = tree.GetRootCellSize();
+  stm::RootBox<Dim> kept;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    kept.Lower[axis] = geometry.OwnedRootLower[axis] - (stm::GhostRootLayers - 1);
+    kept.Upper[axis] = geometry.OwnedRootUpper[axis] + (stm::GhostRootLayers - 1);
+  }
+  hidden.assign(static_cast<std::size_t>(tree.GetNumberOfLeaves()), 0);
+  vtkSMPTools::For(0, tree.GetNumberOfLeaves(), 8192,
+    [&](vtkIdType begin, vtkIdType end)
+    {
+      for (vtkIdType leaf = begin; leaf < end; ++leaf)
+      {
+        stm::LatticeIndex<Dim> root;
+        for (int axis = 0; axis < Dim; ++axis)
+        {
+          root[axis] = tree.LeafAnchors[leaf][axis] / rootSize[axis];
+        }
+        hidden[leaf] = kept.Contains(root) ? 0 : 1;
+      }
+    });
+}
+
 template <int Dim>
 bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry,
   stm::SpacetreeTessellationOptions options, int separatingFunction, double sigma,
@@ -288,6 +319,10 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   if (!stmSpacetreeData::ReadSpacetree<Dim>(input, tree, error))
   {
     return false;
+  }
+  if (geometry.IsPiece)
+  {
+    HideOuterGhostLayer<Dim>(tree, geometry, options.HiddenLeaves);
   }
   const std::array<double, Dim> voxelEdges = VoxelEdges<Dim>(tree, geometry);
   if (!options.IncludeBackground)

@@ -94,6 +94,10 @@ struct SpacetreeTessellationOptions
   /// Layers of background leaves around the body of interest to tessellate too (each layer:
   /// the background leaves touching the previous ones); ignored with IncludeBackground.
   int BoundaryLayers = 0;
+  /// Per leaf (empty: none), 1 for a leaf that gives no cells, though its corners still shape
+  /// its neighbours' cells as any leaf's do: a piece's outer ghost layer, whose leaves are
+  /// there for their neighbours' sake (RootPieces.h).
+  std::vector<std::uint8_t> HiddenLeaves;
 };
 
 /// The cells of a k-face are polytopes P_j of the paper's equation (1), 1 <= j <= k: cones with
@@ -367,6 +371,11 @@ public:
     {
       return Status::Invalid("the number of boundary layers must not be negative");
     }
+    if (!options.HiddenLeaves.empty() &&
+      static_cast<std::int64_t>(options.HiddenLeaves.size()) != tree.GetNumberOfLeaves())
+    {
+      return Status::Invalid("the hidden leaves do not have one entry per leaf");
+    }
     this->Tree = &tree;
     this->Sizes = tree.CellSizes.data();
     this->MaxLevel = tree.MaxLevel;
@@ -543,6 +552,10 @@ public:
   /// Whether a leaf belongs to the output.
   bool IsSelected(std::int64_t leaf) const
   {
+    if (!this->Options.HiddenLeaves.empty() && this->Options.HiddenLeaves[leaf] != 0)
+    {
+      return false;
+    }
     if (this->Options.IncludeBackground || this->Tree->LeafMaterials[leaf] != BackgroundMaterial)
     {
       return true;

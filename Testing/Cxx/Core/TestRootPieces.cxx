@@ -367,13 +367,40 @@ void ExpectPiecesReproduceTheWholeMesh(const LabelImage<D>& image, const PieceCa
         balanceOptions.BalanceLevel = c.BalanceLevel;
         ASSERT_TRUE(stm::SpacetreeBalancer<D>().Balance(tree, balanceOptions, executor).IsOk());
       }
-      TessellationMesh<D> mesh;
-      ASSERT_TRUE(TessellateTree<D>(tree, tessellation, executor, mesh).IsOk());
       stm::RootBox<D> local;
       for (int axis = 0; axis < D; ++axis)
       {
         local.Lower[axis] = owned.Lower[axis] - ghost.Lower[axis];
         local.Upper[axis] = owned.Upper[axis] - ghost.Lower[axis];
+      }
+      // As the filter does: the outer ghost layer's leaves give no cells.
+      stm::SpacetreeTessellationOptions pieceTessellation = tessellation;
+      pieceTessellation.HiddenLeaves.assign(static_cast<std::size_t>(tree.GetNumberOfLeaves()), 0);
+      std::int64_t hidden = 0;
+      for (std::int64_t leaf = 0; leaf < tree.GetNumberOfLeaves(); ++leaf)
+      {
+        bool inner = true;
+        for (int axis = 0; axis < D; ++axis)
+        {
+          const std::int64_t root = tree.LeafAnchors[leaf][axis] / tree.GetRootCellSize()[axis];
+          inner = inner && root >= local.Lower[axis] - (stm::GhostRootLayers - 1) &&
+            root < local.Upper[axis] + (stm::GhostRootLayers - 1);
+        }
+        pieceTessellation.HiddenLeaves[leaf] = inner ? 0 : 1;
+        hidden += inner ? 0 : 1;
+      }
+      TessellationMesh<D> mesh;
+      ASSERT_TRUE(TessellateTree<D>(tree, pieceTessellation, executor, mesh).IsOk());
+      TessellationMesh<D> unhidden;
+      ASSERT_TRUE(TessellateTree<D>(tree, tessellation, executor, unhidden).IsOk());
+      EXPECT_LE(mesh.GetNumberOfCells(), unhidden.GetNumberOfCells());
+      stm::SpacetreeTessellationOptions wrongSize = pieceTessellation;
+      wrongSize.HiddenLeaves.push_back(0);
+      TessellationMesh<D> refused;
+      EXPECT_FALSE(TessellateTree<D>(tree, wrongSize, executor, refused).IsOk());
+      if (hidden > 0 && c.IncludeBackground)
+      {
+        EXPECT_LT(mesh.GetNumberOfCells(), unhidden.GetNumberOfCells());
       }
       const std::vector<CellKey<D>> cells = OwnedCells<D>(mesh, local, rootHalfUnits, halfOffset);
       const std::vector<CellKey<D>> wholeCells =
