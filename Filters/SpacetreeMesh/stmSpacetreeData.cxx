@@ -335,15 +335,15 @@ bool ReadLeaves(vtkDataArray* levels, vtkDataArray* materials, vtkDataArray* ind
 } // namespace
 
 template <int Dim>
-void MarkGhostLeaves(
-  const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry, std::uint8_t* ghosts)
+void MarkLeavesOutsideOwnedBox(const stm::Spacetree<Dim>& tree,
+  const stmSpacetreeGeometry& geometry, int grownBy, std::uint8_t mark, std::uint8_t* marks)
 {
   const stm::LatticeIndex<Dim>& rootSize = tree.GetRootCellSize();
   stm::RootBox<Dim> owned;
   for (int axis = 0; axis < Dim; ++axis)
   {
-    owned.Lower[axis] = geometry.OwnedRootLower[axis];
-    owned.Upper[axis] = geometry.OwnedRootUpper[axis];
+    owned.Lower[axis] = geometry.OwnedRootLower[axis] - grownBy;
+    owned.Upper[axis] = geometry.OwnedRootUpper[axis] + grownBy;
   }
   vtkSMPTools::For(0, tree.GetNumberOfLeaves(), 8192,
     [&](vtkIdType begin, vtkIdType end)
@@ -355,7 +355,7 @@ void MarkGhostLeaves(
         {
           root[axis] = tree.LeafAnchors[leaf][axis] / rootSize[axis];
         }
-        ghosts[leaf] = owned.Contains(root) ? 0 : vtkDataSetAttributes::DUPLICATECELL;
+        marks[leaf] = owned.Contains(root) ? 0 : mark;
       }
     });
 }
@@ -649,15 +649,16 @@ void WriteSpacetree(const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry&
     AddDoubleArray(fd, LatticeOffsetName, geometry.LatticeOffset, Dim);
     stmPieces::MarkPiece(fd);
     vtkSmartPointer<vtkUnsignedCharArray> ghosts = stmPieces::NewGhostArray(leaves);
-    MarkGhostLeaves<Dim>(tree, geometry, ghosts->GetPointer(0));
+    MarkLeavesOutsideOwnedBox<Dim>(
+      tree, geometry, 0, vtkDataSetAttributes::DUPLICATECELL, ghosts->GetPointer(0));
     output->GetCellData()->AddArray(ghosts);
   }
 }
 
-template void MarkGhostLeaves<2>(
-  const stm::Spacetree<2>&, const stmSpacetreeGeometry&, std::uint8_t*);
-template void MarkGhostLeaves<3>(
-  const stm::Spacetree<3>&, const stmSpacetreeGeometry&, std::uint8_t*);
+template void MarkLeavesOutsideOwnedBox<2>(
+  const stm::Spacetree<2>&, const stmSpacetreeGeometry&, int, std::uint8_t, std::uint8_t*);
+template void MarkLeavesOutsideOwnedBox<3>(
+  const stm::Spacetree<3>&, const stmSpacetreeGeometry&, int, std::uint8_t, std::uint8_t*);
 template bool ReadSpacetree<2>(vtkUnstructuredGrid*, stm::Spacetree<2>&, std::string&);
 template bool ReadSpacetree<3>(vtkUnstructuredGrid*, stm::Spacetree<3>&, std::string&);
 template void WriteSpacetree<2>(

@@ -89,11 +89,12 @@ void RemoveSpacetreeFieldData(vtkFieldData* fieldData);
 template <int Dim>
 bool ReadSpacetree(vtkUnstructuredGrid* input, stm::Spacetree<Dim>& tree, std::string& error);
 
-/// For a piece's tree (stmSpacetreeGeometry::IsPiece): writes per leaf into `ghosts`
-/// vtkDataSetAttributes::DUPLICATECELL where its root cell is not the piece's own, else 0.
+/// For a piece's tree (stmSpacetreeGeometry::IsPiece): writes per leaf into `marks` `mark`
+/// where its root cell lies outside the piece's own box grown by `grownBy` root cells, else 0.
+/// With grownBy 0 and vtkDataSetAttributes::DUPLICATECELL: the ghost leaves.
 template <int Dim>
-void MarkGhostLeaves(
-  const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry, std::uint8_t* ghosts);
+void MarkLeavesOutsideOwnedBox(const stm::Spacetree<Dim>& tree,
+  const stmSpacetreeGeometry& geometry, int grownBy, std::uint8_t mark, std::uint8_t* marks);
 
 /// Writes the spacetree and its geometry into an (empty) unstructured grid; a piece's tree also
 /// gets its owned root cells, the piece marker and vtkGhostType on the ghost leaves.

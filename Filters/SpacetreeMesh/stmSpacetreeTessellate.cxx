@@ -279,36 +279,6 @@ int RequiredBoundaryLayers(int function, double sigma, const std::array<double, 
   return 0;
 }
 
-/// A piece's leaves beyond the first of its ghost root layers: they give no cells. The owned
-/// cells need only the leaves next to them; the outer layer is there to make those the whole
-/// tree's (stm::GhostRootLayers), and its cells would only cost memory and time in every stage.
-template <int Dim>
-void HideOuterGhostLayer(const stm::Spacetree<Dim>& tree, const stmSpacetreeGeometry& geometry,
-  std::vector<std::uint8_t>& hidden)
-{
-  const stm::LatticeIndex<Dim>& rootSize = tree.GetRootCellSize();
-  stm::RootBox<Dim> kept;
-  for (int axis = 0; axis < Dim; ++axis)
-  {
-    kept.Lower[axis] = geometry.OwnedRootLower[axis] - (stm::GhostRootLayers - 1);
-    kept.Upper[axis] = geometry.OwnedRootUpper[axis] + (stm::GhostRootLayers - 1);
-  }
-  hidden.assign(static_cast<std::size_t>(tree.GetNumberOfLeaves()), 0);
-  vtkSMPTools::For(0, tree.GetNumberOfLeaves(), 8192,
-    [&](vtkIdType begin, vtkIdType end)
-    {
-      for (vtkIdType leaf = begin; leaf < end; ++leaf)
-      {
-        stm::LatticeIndex<Dim> root;
-        for (int axis = 0; axis < Dim; ++axis)
-        {
-          root[axis] = tree.LeafAnchors[leaf][axis] / rootSize[axis];
-        }
-        hidden[leaf] = kept.Contains(root) ? 0 : 1;
-      }
-    });
-}
-
 template <int Dim>
 bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry,
   stm::SpacetreeTessellationOptions options, int separatingFunction, double sigma,
@@ -322,7 +292,12 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   }
   if (geometry.IsPiece)
   {
-    HideOuterGhostLayer<Dim>(tree, geometry, options.HiddenLeaves);
+    // The leaves beyond the first ghost root layer give no cells: they are there to make the
+    // first layer's leaves the whole tree's (stm::GhostRootLayers), and their cells would only
+    // cost memory and time in every later stage.
+    options.HiddenLeaves.assign(static_cast<std::size_t>(tree.GetNumberOfLeaves()), 0);
+    stmSpacetreeData::MarkLeavesOutsideOwnedBox<Dim>(
+      tree, geometry, stm::GhostRootLayers - 1, 1, options.HiddenLeaves.data());
   }
   const std::array<double, Dim> voxelEdges = VoxelEdges<Dim>(tree, geometry);
   if (!options.IncludeBackground)
@@ -470,7 +445,8 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   {
     // A cell is a ghost where its leaf is.
     std::vector<std::uint8_t> ghostLeaves(static_cast<std::size_t>(tree.GetNumberOfLeaves()));
-    stmSpacetreeData::MarkGhostLeaves<Dim>(tree, geometry, ghostLeaves.data());
+    stmSpacetreeData::MarkLeavesOutsideOwnedBox<Dim>(
+      tree, geometry, 0, vtkDataSetAttributes::DUPLICATECELL, ghostLeaves.data());
     const std::vector<std::int64_t>& leafCells = tessellator.GetLeafCellOffsets();
     vtkSmartPointer<vtkUnsignedCharArray> ghosts = stmPieces::NewGhostArray(cells);
     unsigned char* ghostValues = ghosts->GetPointer(0);

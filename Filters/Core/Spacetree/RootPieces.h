@@ -80,6 +80,25 @@ struct RootBox
   }
 };
 
+/// One step of a bisection: `box`, holding pieces [first, first + count), is cut at `cut` across
+/// `axis`, the lower side holding lowerCount of them; keeps the side that holds `piece`.
+template <int Dim>
+void KeepSideOfPiece(std::int64_t piece, int axis, std::int64_t cut, std::int64_t lowerCount,
+  RootBox<Dim>& box, std::int64_t& first, std::int64_t& count)
+{
+  if (piece < first + lowerCount)
+  {
+    box.Upper[axis] = cut;
+    count = lowerCount;
+  }
+  else
+  {
+    box.Lower[axis] = cut;
+    first += lowerCount;
+    count -= lowerCount;
+  }
+}
+
 /// Piece `piece` of `pieces` (0 <= piece < pieces) of a root grid: the grid is bisected
 /// recursively, each time across the middle of its longest axis (the lowest of equal ones), and
 /// the pieces are shared between the halves in proportion to their cells, so the boxes
@@ -129,17 +148,7 @@ RootBox<Dim> PieceRootBox(const LatticeIndex<Dim>& rootGridDimensions, int piece
       count <= cells ? std::min<std::int64_t>(count - 1, lowerCells) : count - upperCells;
     const std::int64_t lowerCount =
       std::clamp<std::int64_t>((count * lowerCells + cells / 2) / cells, least, most);
-    if (piece < first + lowerCount)
-    {
-      box.Upper[axis] = cut;
-      count = lowerCount;
-    }
-    else
-    {
-      box.Lower[axis] = cut;
-      first += lowerCount;
-      count -= lowerCount;
-    }
+    KeepSideOfPiece<Dim>(piece, axis, cut, lowerCount, box, first, count);
   }
   return box;
 }
@@ -363,17 +372,7 @@ RootBox<Dim> PieceRootBox(const LatticeIndex<Dim>& rootGridDimensions, int piece
       }
       return box;
     }
-    if (piece < first + bestLowerCount)
-    {
-      box.Upper[bestAxis] = bestCut;
-      count = bestLowerCount;
-    }
-    else
-    {
-      box.Lower[bestAxis] = bestCut;
-      first += bestLowerCount;
-      count -= bestLowerCount;
-    }
+    KeepSideOfPiece<Dim>(piece, bestAxis, bestCut, bestLowerCount, box, first, count);
   }
   return box;
 }
