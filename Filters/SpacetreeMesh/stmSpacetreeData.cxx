@@ -338,24 +338,19 @@ template <int Dim>
 void MarkLeavesOutsideOwnedBox(const stm::Spacetree<Dim>& tree,
   const stmSpacetreeGeometry& geometry, int grownBy, std::uint8_t mark, std::uint8_t* marks)
 {
-  const stm::LatticeIndex<Dim>& rootSize = tree.GetRootCellSize();
   stm::RootBox<Dim> owned;
   for (int axis = 0; axis < Dim; ++axis)
   {
-    owned.Lower[axis] = geometry.OwnedRootLower[axis] - grownBy;
-    owned.Upper[axis] = geometry.OwnedRootUpper[axis] + grownBy;
+    owned.Lower[axis] = geometry.OwnedRootLower[axis];
+    owned.Upper[axis] = geometry.OwnedRootUpper[axis];
   }
+  const stm::RootBox<Dim> kept = owned.Grown(grownBy);
   vtkSMPTools::For(0, tree.GetNumberOfLeaves(), 8192,
     [&](vtkIdType begin, vtkIdType end)
     {
       for (vtkIdType leaf = begin; leaf < end; ++leaf)
       {
-        stm::LatticeIndex<Dim> root;
-        for (int axis = 0; axis < Dim; ++axis)
-        {
-          root[axis] = tree.LeafAnchors[leaf][axis] / rootSize[axis];
-        }
-        marks[leaf] = owned.Contains(root) ? 0 : mark;
+        marks[leaf] = stm::LeafInRootBox<Dim>(tree, leaf, kept) ? 0 : mark;
       }
     });
 }

@@ -78,7 +78,31 @@ struct RootBox
     }
     return true;
   }
+
+  /// The box grown by `layers` root cells on every side (not clipped).
+  RootBox Grown(std::int64_t layers) const
+  {
+    RootBox grown = *this;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      grown.Lower[axis] -= layers;
+      grown.Upper[axis] += layers;
+    }
+    return grown;
+  }
 };
+
+/// Whether leaf `leaf` of `tree` lies in the root cells of `box` (in the tree's root indices).
+template <int Dim>
+bool LeafInRootBox(const Spacetree<Dim>& tree, std::int64_t leaf, const RootBox<Dim>& box)
+{
+  LatticeIndex<Dim> root;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    root[axis] = tree.LeafAnchors[leaf][axis] / tree.GetRootCellSize()[axis];
+  }
+  return box.Contains(root);
+}
 
 /// One step of a bisection: `box`, holding pieces [first, first + count), is cut at `cut` across
 /// `axis`, the lower side holding lowerCount of them; keeps the side that holds `piece`.
@@ -247,6 +271,37 @@ std::vector<std::int64_t> RootCellCosts(const MaterialImage<Dim>& image,
   return costs;
 }
 
+/// The root cells a piece is meshed from: `owned` grown by `ghostCells` on every side, its
+/// lower corner rounded down to an even index, clipped to the grid. Empty for an empty box.
+template <int Dim>
+RootBox<Dim> GhostRootBox(const RootBox<Dim>& owned, const LatticeIndex<Dim>& rootGridDimensions,
+  int ghostCells = GhostRootLayers)
+{
+  if (owned.IsEmpty())
+  {
+    return owned;
+  }
+  RootBox<Dim> box;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    const std::int64_t lower = std::max<std::int64_t>(0, owned.Lower[axis] - ghostCells);
+    box.Lower[axis] = lower - lower % 2;
+    box.Upper[axis] = std::min(rootGridDimensions[axis], owned.Upper[axis] + ghostCells);
+  }
+  return box;
+}
+
+/// A side's cost per piece, the fraction Cost / Pieces, compared exactly.
+struct CostShare
+{
+  std::int64_t Cost = 0;
+  std::int64_t Pieces = 1;
+  bool operator<(const CostShare& other) const
+  {
+    return this->Cost * other.Pieces < other.Cost * this->Pieces;
+  }
+};
+
 /// Piece `piece` of `pieces` of a root grid, the boxes balanced by `rootCellCosts` (per root
 /// cell, first axis fastest, as RootCellCosts makes them): the grid is bisected recursively,
 /// each time by the plane (any axis, between root cells) and the share of the pieces that
@@ -273,15 +328,11 @@ RootBox<Dim> PieceRootBox(const LatticeIndex<Dim>& rootGridDimensions, int piece
   std::vector<std::int64_t> layerCosts;
   while (count > 1)
   {
-    // The best cut: the smallest larger cost per piece, compared exactly as fractions.
+    // The best cut: the smallest larger cost per piece, without and then with the ghosts.
     bool found = false;
     int bestAxis = 0;
     std::int64_t bestCut = 0, bestLowerCount = 0;
-    // The larger side's cost per piece, as a fraction, without and with the ghost layers.
-    std::int64_t bestCost = 0, bestPieces = 1, bestGhostedCost = 0, bestGhostedPieces = 1;
-    // Whether a / b < c / d, for non-negative a, c and positive b, d.
-    const auto less = [](std::int64_t a, std::int64_t b, std::int64_t c, std::int64_t d)
-    { return a * d < c * b; };
+    CostShare best, bestGhosted;
     const std::int64_t boxCells = box.GetNumberOfCells();
     for (int axis = 0; axis < Dim; ++axis)
     {
@@ -290,9 +341,9 @@ RootBox<Dim> PieceRootBox(const LatticeIndex<Dim>& rootGridDimensions, int piece
       const std::int64_t layerCells = boxCells / (upper - lower);
       // Costs of the layers across the axis, over the box's extent on the other axes, from the
       // ghost layers below and above the box too.
-      constexpr std::int64_t ghosts = GhostRootLayers;
-      const std::int64_t from = std::max<std::int64_t>(0, lower - ghosts - 1);
-      const std::int64_t to = std::min<std::int64_t>(rootGridDimensions[axis], upper + ghosts);
+      const RootBox<Dim> boxGhosts = GhostRootBox<Dim>(box, rootGridDimensions);
+      const std::int64_t from = boxGhosts.Lower[axis];
+      const std::int64_t to = boxGhosts.Upper[axis];
       layerCosts.assign(static_cast<std::size_t>(to - from), 0);
       RootBox<Dim> slab = box;
       slab.Lower[axis] = from;
@@ -310,20 +361,16 @@ RootBox<Dim> PieceRootBox(const LatticeIndex<Dim>& rootGridDimensions, int piece
       }
       const auto costOf = [&](std::int64_t a, std::int64_t b) // layers [a, b)
       { return prefix[b - from] - prefix[a - from]; };
-      const auto evenStart = [](std::int64_t index) // a ghost box's lower end
-      {
-        index = std::max<std::int64_t>(0, index);
-        return index - index % 2;
-      };
-      const std::int64_t ghostBelow = evenStart(lower - ghosts);
       for (std::int64_t cut = lower + 1; cut < upper; ++cut)
       {
+        RootBox<Dim> lowerSide = box;
+        lowerSide.Upper[axis] = cut;
+        RootBox<Dim> upperSide = box;
+        upperSide.Lower[axis] = cut;
+        const RootBox<Dim> lowerGhosts = GhostRootBox<Dim>(lowerSide, rootGridDimensions);
+        const RootBox<Dim> upperGhosts = GhostRootBox<Dim>(upperSide, rootGridDimensions);
         const std::int64_t lowerCells = layerCells * (cut - lower);
         const std::int64_t upperCells = layerCells * (upper - cut);
-        const std::int64_t lowerCost = costOf(ghostBelow, std::min(to, cut + ghosts));
-        const std::int64_t upperCost = costOf(evenStart(cut - ghosts), to);
-        const std::int64_t lowerOwn = costOf(lower, cut);
-        const std::int64_t upperOwn = costOf(cut, upper);
         for (const std::int64_t lowerCount : { count / 2, count - count / 2 })
         {
           const std::int64_t upperCount = count - lowerCount;
@@ -331,31 +378,24 @@ RootBox<Dim> PieceRootBox(const LatticeIndex<Dim>& rootGridDimensions, int piece
           {
             continue;
           }
-          // The larger side's cost per piece, as the fraction cost / pieces.
-          const bool lowerLarger = !less(lowerOwn, lowerCount, upperOwn, upperCount);
-          const std::int64_t cost = lowerLarger ? lowerOwn : upperOwn;
-          const std::int64_t costPieces = lowerLarger ? lowerCount : upperCount;
-          const bool lowerGhostedLarger = !less(lowerCost, lowerCount, upperCost, upperCount);
-          const std::int64_t ghostedCost = lowerGhostedLarger ? lowerCost : upperCost;
-          const std::int64_t ghostedPieces = lowerGhostedLarger ? lowerCount : upperCount;
-          const bool better = !found || less(cost, costPieces, bestCost, bestPieces) ||
-            (!less(bestCost, bestPieces, cost, costPieces) &&
-              less(ghostedCost, ghostedPieces, bestGhostedCost, bestGhostedPieces));
-          if (better)
+          const CostShare own = std::max(CostShare{ costOf(lower, cut), lowerCount },
+            CostShare{ costOf(cut, upper), upperCount });
+          const CostShare ghosted = std::max(
+            CostShare{ costOf(lowerGhosts.Lower[axis], lowerGhosts.Upper[axis]), lowerCount },
+            CostShare{ costOf(upperGhosts.Lower[axis], upperGhosts.Upper[axis]), upperCount });
+          if (!found || own < best || (!(best < own) && ghosted < bestGhosted))
           {
             found = true;
             bestAxis = axis;
             bestCut = cut;
             bestLowerCount = lowerCount;
-            bestCost = cost;
-            bestPieces = costPieces;
-            bestGhostedCost = ghostedCost;
-            bestGhostedPieces = ghostedPieces;
+            best = own;
+            bestGhosted = ghosted;
           }
         }
       }
     }
-    if (!found || bestCost == 0)
+    if (!found || best.Cost == 0)
     {
       // No cost to balance here: the halves of the longest axis, as without costs.
       LatticeIndex<Dim> size;
@@ -373,26 +413,6 @@ RootBox<Dim> PieceRootBox(const LatticeIndex<Dim>& rootGridDimensions, int piece
       return box;
     }
     KeepSideOfPiece<Dim>(piece, bestAxis, bestCut, bestLowerCount, box, first, count);
-  }
-  return box;
-}
-
-/// The root cells a piece is meshed from: `owned` grown by `ghostCells` on every side, its
-/// lower corner rounded down to an even index, clipped to the grid. Empty for an empty box.
-template <int Dim>
-RootBox<Dim> GhostRootBox(const RootBox<Dim>& owned, const LatticeIndex<Dim>& rootGridDimensions,
-  int ghostCells = GhostRootLayers)
-{
-  if (owned.IsEmpty())
-  {
-    return owned;
-  }
-  RootBox<Dim> box;
-  for (int axis = 0; axis < Dim; ++axis)
-  {
-    const std::int64_t lower = std::max<std::int64_t>(0, owned.Lower[axis] - ghostCells);
-    box.Lower[axis] = lower - lower % 2;
-    box.Upper[axis] = std::min(rootGridDimensions[axis], owned.Upper[axis] + ghostCells);
   }
   return box;
 }

@@ -376,16 +376,11 @@ void ExpectPiecesReproduceTheWholeMesh(const LabelImage<D>& image, const PieceCa
       // As the filter does: the outer ghost layer's leaves give no cells.
       stm::SpacetreeTessellationOptions pieceTessellation = tessellation;
       pieceTessellation.HiddenLeaves.assign(static_cast<std::size_t>(tree.GetNumberOfLeaves()), 0);
+      const stm::RootBox<D> kept = local.Grown(stm::GhostRootLayers - 1);
       std::int64_t hidden = 0;
       for (std::int64_t leaf = 0; leaf < tree.GetNumberOfLeaves(); ++leaf)
       {
-        bool inner = true;
-        for (int axis = 0; axis < D; ++axis)
-        {
-          const std::int64_t root = tree.LeafAnchors[leaf][axis] / tree.GetRootCellSize()[axis];
-          inner = inner && root >= local.Lower[axis] - (stm::GhostRootLayers - 1) &&
-            root < local.Upper[axis] + (stm::GhostRootLayers - 1);
-        }
+        const bool inner = stm::LeafInRootBox<D>(tree, leaf, kept);
         pieceTessellation.HiddenLeaves[leaf] = inner ? 0 : 1;
         hidden += inner ? 0 : 1;
       }
