@@ -31,7 +31,7 @@
  * Pieces (pvbatch and pvserver under MPI ask for piece k of n): by default piece 0 builds the
  * whole tree and the others are empty. With SplitIntoPieces, piece k builds the root cells of
  * box k of n of the whole image's root grid (stm::PieceRootBox), from their voxels and those of
- * one layer of root cells around them (the ghost layer, whose leaves get vtkGhostType
+ * two layers of root cells around them (the ghost layer, whose leaves get vtkGhostType
  * DUPLICATECELL). The leaves of a piece's own box, and the cells the later stages make of them
  * up to stmMarchingSimplices, are exactly those of the whole image, so adjacent pieces match on
  * their shared boundary (docs/design.md, "Pieces and MPI").

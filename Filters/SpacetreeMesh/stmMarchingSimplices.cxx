@@ -521,6 +521,11 @@ int stmMarchingSimplices::RequestData(
   }
   this->NumberOfSplitCells = request.SplitCells;
   this->NumberOfCutPoints = request.CutPoints;
+  if (this->OutputMode == VOLUME)
+  {
+    stmCutInput::KeepGhostRings(vtkUnstructuredGrid::SafeDownCast(output), dimension,
+      stmCutInput::KeptGhostRings(outputVector->GetInformationObject(0)), this);
+  }
   stmPieces::PassPieceMarker(input, output);
   this->UpdateProgress(1.0);
   return 1;

@@ -29,6 +29,11 @@
  *   zero facets of the input): triangles oriented outward with the cell array "Normals" (line
  *   segments in 2D), and the point arrays interpolated.
  *
+ * A piece of a larger image (stmImageToSpacetree::SplitIntoPieces): the VOLUME output keeps of
+ * the piece's ghost cells the rings its request asks for (ghost levels), and at least the cells
+ * that share a point with the piece's own cells, which is all that stmBoundarySmooth needs; the
+ * rest of the ghost layer served the snapping and the cut.
+ *
  * @sa stmSpacetreeTessellate stmSeparatingFunction
  */
 

@@ -351,6 +351,8 @@ int stmMultiMaterialCut::RequestData(
   this->NumberOfSplitAssignedCells = result.SplitAssignedCells;
   this->NumberOfCutPoints = result.CutPoints;
   this->NumberOfSnappedPoints = result.SnappedPoints;
+  stmCutInput::KeepGhostRings(
+    output, dimension, stmCutInput::KeptGhostRings(outputVector->GetInformationObject(0)), this);
   stmPieces::PassPieceMarker(input, output);
   this->UpdateProgress(1.0);
   return 1;

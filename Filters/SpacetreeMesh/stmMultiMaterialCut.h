@@ -29,6 +29,10 @@
  * "OriginalMaterial" the input cell's Material; other cell arrays are copied from the input cell.
  * The result does not depend on the number of threads.
  *
+ * A piece of a larger image (stmImageToSpacetree::SplitIntoPieces): the output keeps of the
+ * piece's ghost cells the rings its request asks for (ghost levels), and at least the cells that
+ * share a point with the piece's own cells, which is all that stmBoundarySmooth needs.
+ *
  * @sa stmMarchingSimplices stmSpacetreeTessellate stmBoundarySmooth stmInterfaceSurface
  */
 

@@ -14,6 +14,8 @@
  * (stm::PieceRootBox) from its voxels and those of two layers of ghost root cells around it;
  * the tree and every mesh made of it carry the field array PieceMarkerName and vtkGhostType on
  * the ghost layer's leaves and cells, and the later stages mesh such a piece like a whole image.
+ * The cuts keep of the ghost cells only the rings their request asks for, at least the one ring
+ * the smoothing reads (stmCutInput::KeepGhostRings).
  */
 
 #ifndef stmPieces_h

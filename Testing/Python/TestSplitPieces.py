@@ -1,12 +1,14 @@
 """ImageToSpacetree's Split Into Pieces (run by pvpython): piece k of n builds the root cells of
-its box and one ghost layer of root cells, and the stages up to MarchingSimplices (or
+its box and two ghost layers of root cells, and the stages up to MarchingSimplices (or
 MultiMaterialCut) mesh it. The
 cells each piece owns (vtkGhostType 0) are exactly the serial mesh's cells there, so adjacent
 pieces share their boundary's points and facets, and the pieces together are the serial mesh:
 2D and 3D, several labels, balance levels 1 and 2, 2, 3 and 5 pieces, point and cell labels.
-BoundarySmooth holds the points of a piece's ghost cells: the smoothed pieces still match (the
-owned cells together have the serial mesh's cells and boundary facets, by coordinates), and
-differ from the serial mesh only near where they meet.
+The cuts keep the ghost cells within the rings the request asks for (its ghost levels), at least
+the one ring of cells that share a point with the own cells. BoundarySmooth holds the points of
+a piece's ghost cells: the smoothed pieces still match (the owned cells together have the serial
+mesh's cells and boundary facets, by coordinates), differ from the serial mesh only near where
+they meet, and are the same with one ring of ghost cells as with all the piece meshed.
 """
 import numpy as np
 
@@ -114,6 +116,10 @@ def check_pieces(labels, dimension, cell_data, balance_level, cut, what, gray=No
                     "%s: piece %d of %d is not marked" % (what, piece, pieces))
             own = cells(mesh, nodes)
             T.check(len(own) > 0, "%s: piece %d of %d owns no cell" % (what, piece, pieces))
+            if cut in (True, "materials"):
+                T.check(ghost_rings(mesh, nodes) == 1,
+                        "%s: piece %d of %d: the cut keeps %d rings of ghost cells, not 1" % (
+                            what, piece, pieces, ghost_rings(mesh, nodes)))
             together.append(own)
         together = np.concatenate(together)
         together = together[np.lexsort(together.T[::-1])]
@@ -122,6 +128,25 @@ def check_pieces(labels, dimension, cell_data, balance_level, cut, what, gray=No
                 % (what, pieces, len(together), len(expected)))
         T.check(np.array_equal(together, expected),
                 "%s, %d pieces: the owned cells are not the serial mesh's" % (what, pieces))
+
+
+def ghost_rings(mesh, nodes):
+    """How many rings of ghost cells a piece's mesh has: ring k shares a point with ring k - 1,
+    ring 0 being the own cells."""
+    conn = T.connectivity(mesh, nodes)
+    ghost = vtk_to_numpy(mesh.GetCellData().GetArray(vtkDataSetAttributes.GhostArrayName())) != 0
+    reached = np.zeros(mesh.GetNumberOfPoints(), dtype=bool)
+    reached[conn[~ghost].ravel()] = True
+    left, rings = ghost.copy(), 0
+    while left.any():
+        ring = left & reached[conn].any(axis=1)
+        if not ring.any():
+            break
+        rings += 1
+        left &= ~ring
+        reached[conn[ring].ravel()] = True
+    T.check(not left.any(), "%d ghost cells are not joined to the own cells" % left.sum())
+    return rings
 
 
 def facet_counts(rows, nodes):
@@ -153,6 +178,18 @@ def check_smoothed_pieces(labels, dimension, pieces, what):
         displacement = vtk_to_numpy(mesh.GetPointData().GetArray("SmoothingDisplacement"))
         T.check(np.abs(displacement).max() > 0.05, "%s: piece %d was not smoothed" % (what, piece))
         together.append(cells(mesh, nodes))
+        # The cut keeps one ring of ghost cells unless asked for more (here: every cell the
+        # piece meshed); the smoothing holds the ghost cells' points and moves no other point
+        # differently with the rest of the layer.
+        whole = chain(image, 1, True, smooth=True)
+        whole[-1].UpdatePiece(piece, pieces, 255)
+        T.check(ghost_rings(mesh, nodes) == 1 and ghost_rings(whole[-1].GetOutput(), nodes) > 3,
+                "%s: piece %d: %d rings of ghost cells, %d when all are asked for" % (
+                    what, piece, ghost_rings(mesh, nodes),
+                    ghost_rings(whole[-1].GetOutput(), nodes)))
+        T.check(np.array_equal(together[-1], cells(whole[-1].GetOutput(), nodes)),
+                "%s: piece %d: the smoothing of its own cells depends on the ghost cells beyond "
+                "the first ring" % (what, piece))
     together = np.concatenate(together)
     T.check(len(together) == len(reference),
             "%s: %d owned cells, the serial mesh has %d" % (what, len(together), len(reference)))

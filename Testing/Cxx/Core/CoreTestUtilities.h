@@ -48,6 +48,54 @@ struct Dim
 
 using AllDimensions = ::testing::Types<Dim<1>, Dim<2>, Dim<3>, Dim<4>>;
 
+/// The Kuhn triangulation of an n^Dim grid of unit cubes: Dim! simplices per cube, one per
+/// permutation (the path from the cube's first corner adding one axis at a time).
+template <int Dim>
+std::vector<std::int64_t> KuhnGrid(int n, std::int64_t& numberOfPoints)
+{
+  numberOfPoints = 1;
+  for (int d = 0; d < Dim; ++d)
+  {
+    numberOfPoints *= n + 1;
+  }
+  auto pointId = [&](const std::array<int, Dim>& x)
+  {
+    std::int64_t id = 0;
+    for (int d = Dim - 1; d >= 0; --d)
+    {
+      id = id * (n + 1) + x[d];
+    }
+    return id;
+  };
+  std::vector<std::int64_t> connectivity;
+  std::int64_t cubes = 1;
+  for (int d = 0; d < Dim; ++d)
+  {
+    cubes *= n;
+  }
+  for (std::int64_t cube = 0; cube < cubes; ++cube)
+  {
+    std::array<int, Dim> corner{};
+    for (int d = 0, rest = static_cast<int>(cube); d < Dim; ++d, rest /= n)
+    {
+      corner[d] = rest % n;
+    }
+    std::array<int, Dim> axes{};
+    std::iota(axes.begin(), axes.end(), 0);
+    do
+    {
+      std::array<int, Dim> x = corner;
+      connectivity.push_back(pointId(x));
+      for (const int axis : axes)
+      {
+        ++x[axis];
+        connectivity.push_back(pointId(x));
+      }
+    } while (std::next_permutation(axes.begin(), axes.end()));
+  }
+  return connectivity;
+}
+
 /// The first D entries of a list of extents, so one list of awkward sizes serves every dimension.
 template <int D>
 stm::LatticeIndex<D> FirstExtents(std::initializer_list<std::int64_t> extents)

@@ -7,6 +7,8 @@
 
 #include "Common/PointCells.h"
 
+#include "CoreTestUtilities.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -17,54 +19,6 @@
 
 namespace
 {
-
-/// The Kuhn triangulation of an n^Dim grid of unit cubes: Dim! simplices per cube, one per
-/// permutation (the path from the cube's first corner adding one axis at a time).
-template <int Dim>
-std::vector<std::int64_t> KuhnGrid(int n, std::int64_t& numberOfPoints)
-{
-  numberOfPoints = 1;
-  for (int d = 0; d < Dim; ++d)
-  {
-    numberOfPoints *= n + 1;
-  }
-  auto pointId = [&](const std::array<int, Dim>& x)
-  {
-    std::int64_t id = 0;
-    for (int d = Dim - 1; d >= 0; --d)
-    {
-      id = id * (n + 1) + x[d];
-    }
-    return id;
-  };
-  std::vector<std::int64_t> connectivity;
-  std::int64_t cubes = 1;
-  for (int d = 0; d < Dim; ++d)
-  {
-    cubes *= n;
-  }
-  for (std::int64_t cube = 0; cube < cubes; ++cube)
-  {
-    std::array<int, Dim> corner{};
-    for (int d = 0, rest = static_cast<int>(cube); d < Dim; ++d, rest /= n)
-    {
-      corner[d] = rest % n;
-    }
-    std::array<int, Dim> axes{};
-    std::iota(axes.begin(), axes.end(), 0);
-    do
-    {
-      std::array<int, Dim> x = corner;
-      connectivity.push_back(pointId(x));
-      for (const int axis : axes)
-      {
-        ++x[axis];
-        connectivity.push_back(pointId(x));
-      }
-    } while (std::next_permutation(axes.begin(), axes.end()));
-  }
-  return connectivity;
-}
 
 template <int Dim>
 void CheckAgainstFacetNeighbour(const std::vector<std::int64_t>& connectivity,
@@ -127,11 +81,11 @@ TEST(PointCells, EachFacetOnceFromItsSmallestPoint)
 {
   std::int64_t points = 0;
   // Outer facets: 2 Dim faces of n^(Dim-1) cubes, each face (Dim-1)! simplices.
-  auto grid2 = KuhnGrid<2>(5, points);
+  auto grid2 = stmtest::KuhnGrid<2>(5, points);
   CheckAgainstFacetNeighbour<2>(grid2, points, 4 * 5);
-  auto grid3 = KuhnGrid<3>(4, points);
+  auto grid3 = stmtest::KuhnGrid<3>(4, points);
   CheckAgainstFacetNeighbour<3>(grid3, points, 6 * 16 * 2);
-  auto grid4 = KuhnGrid<4>(2, points);
+  auto grid4 = stmtest::KuhnGrid<4>(2, points);
   CheckAgainstFacetNeighbour<4>(grid4, points, 8 * 8 * 6);
   const std::vector<std::int64_t> chain = { 0, 1, 2, 1, 2, 3 };
   CheckAgainstFacetNeighbour<1>(chain, 4, 2);
@@ -165,7 +119,7 @@ void CheckParallelBuild(int n)
 {
   constexpr int Corners = Dim + 1;
   std::int64_t points = 0;
-  std::vector<std::int64_t> grid = KuhnGrid<Dim>(n, points);
+  std::vector<std::int64_t> grid = stmtest::KuhnGrid<Dim>(n, points);
   const auto cells = static_cast<std::int64_t>(grid.size()) / Corners;
   ASSERT_GE(cells, 1 << 16) << "below the serial threshold";
   std::vector<std::int64_t> order(static_cast<std::size_t>(cells));
@@ -225,7 +179,7 @@ void CheckNarrowRows(int n)
 {
   constexpr int Corners = Dim + 1;
   std::int64_t points = 0;
-  const std::vector<std::int64_t> grid = KuhnGrid<Dim>(n, points);
+  const std::vector<std::int64_t> grid = stmtest::KuhnGrid<Dim>(n, points);
   const auto cells = static_cast<std::int64_t>(grid.size()) / Corners;
   stm::PointCells<Dim> wide;
   wide.Build(grid.data(), cells, points);
