@@ -405,8 +405,19 @@ def case_threads_and_environment(c):
           "an empty GLIBC_TUNABLES not kept")
     check(results["own_tunables"][0]["malloc_tunables"] == "glibc.malloc.tcache_count=0",
           "the user's GLIBC_TUNABLES not kept")
-    check(results["default"][0]["threads"] == os.cpu_count(),
-          "default threads %d, cores %d" % (results["default"][0]["threads"], os.cpu_count()))
+    cores = sorted(os.sched_getaffinity(0))
+    check(results["default"][0]["threads"] == len(cores),
+          "default threads %d, cores %d" % (results["default"][0]["threads"], len(cores)))
+    if len(cores) > 1:
+        # A process bound to one core (taskset; the child inherits the binding) runs one thread.
+        os.sched_setaffinity(0, cores[:1])
+        try:
+            c.run_ok([image, "-o", c.path("bound.vtu"), "--summary", c.path("bound.json")])
+        finally:
+            os.sched_setaffinity(0, cores)
+        results["bound"] = (load_summary(c.path("bound.json")), c.read_back(c.path("bound.vtu")))
+        check(results["bound"][0]["threads"] == 1,
+              "bound to one core: %d threads" % results["bound"][0]["threads"])
     meshes = [mesh for _, mesh in results.values()]
     check(all(mesh == meshes[0] for mesh in meshes), "the mesh depends on the threads")
     c.run_failing([image, "-o", c.path("bad_env.vtu")], 1, "VTK_SMP_MAX_THREADS",

@@ -14,6 +14,7 @@ cells.
 """
 
 import argparse
+import json
 import os
 import subprocess
 import sys
@@ -70,14 +71,15 @@ class MPIContext(T.Context):
             self.image, _ = T.write_label_image(self, "nested.nii", DIMENSIONS, nested_labels)
         return self.image
 
-    def run_ranks(self, ranks, arguments, expected_code=0):
+    def run_ranks(self, ranks, arguments, expected_code=0, launcher_options=()):
         """mpiexec -n ranks stmesh arguments: (exit code, stdout, stderr)."""
         env = dict(os.environ)
         for name in ("VTK_SMP_BACKEND_IN_USE", "VTK_SMP_MAX_THREADS"):
             env.pop(name, None)
         # Open MPI refuses root without these (CI runs as root).
         env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
-        command = [self.mpiexec, "--oversubscribe", "-n", str(ranks), self.stmesh] + arguments
+        command = [self.mpiexec, "--oversubscribe"] + list(launcher_options) + [
+            "-n", str(ranks), self.stmesh] + arguments
         completed = subprocess.run(command, capture_output=True, text=True, env=env,
                                    cwd=self.work, timeout=280)
         print("$ " + " ".join(command))
@@ -314,6 +316,24 @@ def case_errors(c):
     code, out, err = c.run_ranks(2, [c.labels(), "--labels", "9", "-o", c.path("x.pvtu")],
                                  expected_code=1)
     check(T.ERROR_PREFIX in err and "\ntotal " not in out, "no clean failure")
+
+
+def case_bound_threads(c):
+    # A rank that the launcher binds to one core runs one thread, and says how to give it more;
+    # unbound, one rank takes every core it may run on.
+    cores = len(os.sched_getaffinity(0))
+    for binding, threads in (("core", 1), ("none", cores)):
+        summary_path = c.path("bound_%s.json" % binding)
+        _, _, err = c.run_ranks(1, [c.labels(), "-o", c.path("bound_%s.vtu" % binding),
+                                    "--stop-after", "tessellate", "--summary", summary_path],
+                                launcher_options=("--bind-to", binding))
+        with open(summary_path) as f:
+            found = json.load(f)["threads"]
+        check(found == threads, "--bind-to %s: %d threads, expected %d" % (binding, found, threads))
+        noted = "--bind-to none" in err
+        check(noted == (binding == "core" and cores > 1),
+              "--bind-to %s: the note on the binding is %s" % (
+                  binding, "there" if noted else "missing"))
 
 
 def main():
