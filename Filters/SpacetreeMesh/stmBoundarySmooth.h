@@ -218,7 +218,8 @@ public:
    * materials (the outside counting as one) move, by a per-material offset solved from the
    * volume errors (rounds until every material is within 0.01% of its target, at most ten; each
    * move validated like a smoothing move); junction points stay; the background takes up the
-   * difference. Needs the cell array "Material". Default off.
+   * difference. Needs the cell array "Material". In a piece (SplitIntoPieces) the volumes are
+   * those of its own cells: its ghost cells keep theirs. Default off.
    */
   vtkSetMacro(RestoreOriginalVolumes, bool);
   vtkGetMacro(RestoreOriginalVolumes, bool);

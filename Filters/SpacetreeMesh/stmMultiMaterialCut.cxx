@@ -126,9 +126,11 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
   executor.SetProgressRange(0.15, 0.85);
   std::vector<double> core = frame.CoreCoordinates<Dim>(inputPoints);
   // The input's volume per material, before snapping moves points: what BoundarySmooth's
-  // RestoreOriginalVolumes gives back to each material.
-  const std::vector<double> inputVolumes =
-    stm::VolumePerMaterial<Dim>(core.data(), connectivity, numberOfCells, materials.data(), count);
+  // RestoreOriginalVolumes gives back to each material. A piece's own cells only: the smoothing
+  // sums its volumes without the ghost cells, which it does not move and of which the cut keeps
+  // only a ring.
+  const std::vector<double> inputVolumes = stm::VolumePerMaterial<Dim>(core.data(), connectivity,
+    numberOfCells, materials.data(), count, stmPieces::GhostCellFlags(input));
   stm::MultiMaterialCut<Dim> cut;
   status = cut.Run(numberOfPoints, options.SnapVertices ? core.data() : nullptr, connectivity,
     numberOfCells, materials.data(), count, std::move(fractions), options, executor);

@@ -379,10 +379,12 @@ struct MultiMaterialCutOptions
   }
 };
 
-/// The volume (area in 2D) of the simplices of each material index (0 to K - 1), in cell order.
+/// The volume (area in 2D) of the simplices of each material index (0 to K - 1), in cell order,
+/// leaving out the cells with skipped[c] != 0 (when given: a piece's ghost cells).
 template <int Dim, class IdType, class MaterialType>
 std::vector<double> VolumePerMaterial(const double* points, const IdType* connectivity,
-  std::int64_t numberOfCells, const MaterialType* materials, int numberOfMaterials)
+  std::int64_t numberOfCells, const MaterialType* materials, int numberOfMaterials,
+  const std::uint8_t* skipped = nullptr)
 {
   std::vector<double> volumes(static_cast<std::size_t>(numberOfMaterials), 0.0);
   double factorial = 1.0;
@@ -392,6 +394,10 @@ std::vector<double> VolumePerMaterial(const double* points, const IdType* connec
   }
   for (std::int64_t c = 0; c < numberOfCells; ++c)
   {
+    if (skipped && skipped[c])
+    {
+      continue;
+    }
     const IdType* ids = connectivity + c * (Dim + 1);
     double edges[Dim][Dim];
     for (int col = 0; col < Dim; ++col)

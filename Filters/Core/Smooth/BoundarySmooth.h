@@ -207,7 +207,10 @@ struct BoundarySmoothOptions
   const std::uint8_t* HeldPoints = nullptr;
   /// Per cell, non-zero for a copy of another piece's cell (a piece's ghost layer; nullptr:
   /// none). Its quality enters neither the bounds nor the reported extremes: the layer ends
-  /// where the piece's image ends, and its far cells are cut there as at a false boundary.
+  /// where the piece's image ends, and its far cells are cut there as at a false boundary. Its
+  /// volume enters neither the volume restoration nor the reported volumes: a ghost cell's
+  /// points are held, so it keeps its volume, and counted, it made the restoration's relative
+  /// tolerance depend on how many ghost cells the piece carries.
   const std::uint8_t* GhostCells = nullptr;
 };
 
@@ -334,12 +337,16 @@ private:
   /// Adds value(c) to sums[key(c)] for the cells c in order (deterministic sums), with one map
   /// lookup per run of one key: runs are the rule, cells come leaf by leaf.
   template <class Key, class Value>
-  static void SumPerKey(
-    std::int64_t cells, Key&& key, Value&& value, std::map<std::int64_t, double>& sums)
+  static void SumPerKey(std::int64_t cells, Key&& key, Value&& value,
+    std::map<std::int64_t, double>& sums, const std::uint8_t* skipped)
   {
     auto current = sums.end();
     for (std::int64_t c = 0; c < cells; ++c)
     {
+      if (skipped && skipped[c])
+      {
+        continue;
+      }
       const std::int64_t k = key(c);
       if (current == sums.end() || current->first != k)
       {
@@ -1055,7 +1062,8 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
       cells,
       [&](std::int64_t c)
       { return materials ? static_cast<std::int64_t>(materials[c]) : background + 1; },
-      [&](std::int64_t c) { return this->Determinants[c] / Factorial(Dim); }, volumes);
+      [&](std::int64_t c) { return this->Determinants[c] / Factorial(Dim); }, volumes,
+      options.GhostCells);
     // What MeasureSimplex reports for the worst cell: acos is monotone, so the angle of the
     // largest cosine is the smallest angle.
     smallest = Dim == 1 || cells == 0 ? 180.0 : DihedralDegrees(largestCosine);
@@ -1078,7 +1086,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     SumPerKey(
       cells, [&](std::int64_t c) { return options.VolumeTargetMaterials[c]; },
       [&](std::int64_t c) { return this->Determinants[c] / Factorial(Dim); },
-      this->Stats.TargetVolumes);
+      this->Stats.TargetVolumes, options.GhostCells);
   }
   // The volumes are summed; the final measure makes the determinants again (8 bytes per cell
   // less at the peak of the iterations).
@@ -2408,7 +2416,7 @@ Status BoundarySmoother<Dim>::RestoreVolumes(const PointBlocks& surfaceBlocks,
     volumes.clear();
     SumPerKey(
       this->NumberOfCells, [&](std::int64_t c) { return static_cast<std::int64_t>(materials[c]); },
-      [&](std::int64_t c) { return cellVolumes[c]; }, volumes);
+      [&](std::int64_t c) { return cellVolumes[c]; }, volumes, this->Options.GhostCells);
     // Over the materials that have cells and a target (a target material the cut did not keep
     // is no interface's to restore).
     double largest = 0.0;

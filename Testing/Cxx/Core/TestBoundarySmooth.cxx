@@ -461,8 +461,9 @@ TYPED_TEST(BoundarySmoothTest, HeldPointsStayWhereTheyAre)
   EXPECT_TRUE(report.IsValid()) << report.Summary();
 }
 
-// A piece's ghost cells (GhostCells) leave the quality bounds and the reported extremes to the
-// other cells: all of them marked leave no extremes at all, half of them no worse ones.
+// A piece's ghost cells (GhostCells) leave the quality bounds, the reported extremes and the
+// volumes to the other cells: all of them marked leave no extremes and no volumes at all, half
+// of them no worse extremes and a part of the volume.
 TYPED_TEST(BoundarySmoothTest, GhostCellsDoNotSetTheBounds)
 {
   constexpr int D = TypeParam::value;
@@ -479,6 +480,8 @@ TYPED_TEST(BoundarySmoothTest, GhostCellsDoNotSetTheBounds)
   EXPECT_EQ(ghostStats.WorstConditionBefore, 0.0);
   EXPECT_EQ(ghostStats.MinDihedralBefore, 180.0);
   EXPECT_EQ(ghostStats.WorstConditionAfter, 0.0);
+  EXPECT_TRUE(ghostStats.VolumeBefore.empty());
+  EXPECT_TRUE(ghostStats.VolumeAfter.empty());
 
   std::vector<std::uint8_t> halfGhosts(static_cast<std::size_t>(input.NumberOfCells()), 0);
   for (std::int64_t c = 0; c < input.NumberOfCells(); ++c)
@@ -491,6 +494,17 @@ TYPED_TEST(BoundarySmoothTest, GhostCellsDoNotSetTheBounds)
   EXPECT_GT(halfStats.WorstConditionBefore, 1.0);
   EXPECT_LE(halfStats.WorstConditionBefore, wholeStats.WorstConditionBefore);
   EXPECT_GE(halfStats.MinDihedralBefore, wholeStats.MinDihedralBefore);
+  auto total = [](const std::map<std::int64_t, double>& volumes)
+  {
+    double sum = 0.0;
+    for (const auto& entry : volumes)
+    {
+      sum += entry.second;
+    }
+    return sum;
+  };
+  EXPECT_GT(total(halfStats.VolumeBefore), 0.0);
+  EXPECT_LT(total(halfStats.VolumeBefore), 0.9 * total(wholeStats.VolumeBefore));
   const stm::MeshInvariantReport report = Check<D>(half);
   EXPECT_TRUE(report.IsValid()) << report.Summary();
 }
