@@ -402,16 +402,33 @@ bool SimplexSurelyWithin(
 /// from it and skips the measure while the moves fit in the budget (the decisions stay those of
 /// the measure, so the result does not change).
 ///
-/// The bounds, for edges that each change by at most R (both ends together):
-/// - the edges: sum|e'|^2 <= (sqrt(sum|e|^2) + sqrt(#edges) R)^2;
-/// - the facet normals (the turned edges of a triangle; for a tetrahedron's face, up to its
-///   sign, the cross product of any two of its edges, so of its two shortest, u and v) change
-///   by at most eps = R, resp. eps_k = (|u| + |v|) R + R^2, hence each turns by at most
-///   asin(eps_k / |n_k|), and every dihedral angle shrinks by at most twice the largest turn;
-/// - the determinant, multilinear in the edges from corner 0, by at most R (|e1| + |e2|) + R^2
-///   for triangles and R (|n1| + |n2| + |n3|) + 3 L R^2 + R^3 for tetrahedra.
+/// The bounds, for corner moves of lengths r_i with sum R (the measures are affine in each
+/// corner, so the first-order terms take one corner at a time, and the functions of the r_i
+/// bounded below are convex, so their largest value on {r_i >= 0, sum r_i <= R} is at a corner
+/// of that simplex: one corner moved by all of R):
+/// - the edges: |e'_ij - e_ij| <= r_i + r_j, and sum over the edges of (r_i + r_j)^2 <= d R^2
+///   (each corner is on d edges), so sqrt(sum|e'|^2) <= sqrt(sum|e|^2) + sqrt(d) R;
+/// - the facet normals: a triangle's are its turned edges, which change by at most R; a
+///   tetrahedron's face (a, b, c) has n = a x b + b x c + c x a, so n changes by
+///   da x (b - c) + db x (c - a) + dc x (a - b) + da x db + db x dc + dc x da, at most
+///   eps_k = L_k R + R^2 / 3 with L_k the face's longest edge; each normal turns by at most
+///   asin(eps_k / |n_k|), and the dihedral angle between facets i and j shrinks by at most the
+///   turns of n_i and n_j together (its lead over the bound is shared between the two, below);
+///   over the facets, sum|n'_k - n_k|^2 <= (L + R / 3)^2 sum_k (R - r_k)^2 <= d (L + R / 3)^2 R^2
+///   (L the longest edge; 2 R^2 for triangles);
+/// - the determinant, affine in each corner with gradient n_i (|n_i| the facet's measure
+///   times (d - 1)!) and multilinear in the corners' moves: by at most R max|n_i| + R^2 / 3 for
+///   triangles and R max|n_i| + 3/8 L R^2 + R^3 / 16 for tetrahedra (the products of two and
+///   three moves, with at most L between the remaining corners).
 /// The slack keeps a relative margin of 1e-9 to the bounds, far above the 1e-12 with which
 /// SimplexSurelyWithin covers its rounding.
+///
+/// Until 2026-12-05 the bounds took each edge as changing by R on its own: sqrt(#edges) R for
+/// the edges, (|u| + |v|) R + R^2 for a face's normal (u, v its two shortest edges) and
+/// R (|n1| + |n2| + |n3|) + 3 L R^2 + R^3 for the determinant, and every normal could turn by
+/// half the smallest angle's lead. The slacks of the regular triangle and tetrahedron and of
+/// the checkerboard's corner tetrahedron grew from 0.223, 0.134 and 0.135 to 0.354, 0.322 and
+/// 0.260; the smoother computes 38 % fewer slacks for the same moves (docs/performance.md).
 template <int Dim>
 double SimplexSlack(const double* const (&corners)[Dim + 1], double maxCondition, double maxCosine)
 {
@@ -429,13 +446,37 @@ double SimplexSlack(const double* const (&corners)[Dim + 1], double maxCondition
     }
     constexpr double Margin = 1e-9;
     double lengths[Dim + 1];
-    double shortest = std::numeric_limits<double>::infinity();
     for (int i = 0; i <= Dim; ++i)
     {
       lengths[i] = std::sqrt(t.Squared[i]);
-      shortest = std::min(shortest, lengths[i]);
     }
-    double largestCosine = -1.0;
+    // How fast each facet's normal turns as the corners move, to first order: eps_k / |n_k| per
+    // unit of R, with eps_k = R for triangles and L_k R + R^2 / 3 for tetrahedra (L_k the face's
+    // longest edge).
+    constexpr int Edges[4][3] = { { 3, 4, 5 }, { 1, 2, 5 }, { 0, 2, 4 }, { 0, 1, 3 } };
+    double faceLongest[Dim + 1], rates[Dim + 1];
+    for (int k = 0; k <= Dim; ++k)
+    {
+      if constexpr (Dim == 3)
+      {
+        faceLongest[k] = std::sqrt(std::max(t.EdgeSquared[Edges[k][0]],
+          std::max(t.EdgeSquared[Edges[k][1]], t.EdgeSquared[Edges[k][2]])));
+      }
+      else
+      {
+        faceLongest[k] = 1.0;
+      }
+      rates[k] = faceLongest[k] / lengths[k];
+    }
+    // Each dihedral angle's lead over the bound, d_ij = acos(c_ij) - acos(maxCosine) in (0, pi),
+    // as sin d and cos d. The angle between facets i and j shrinks by at most the turns of n_i
+    // and n_j, so the lead is shared between them in proportion to their rates, w_i + w_j = 1,
+    // and facet k's normal may turn by the smallest of its shares, each at most pi / 2: w d
+    // with sin(w d) >= w sin d (sine is concave on [0, pi]), or for d beyond pi / 2 the
+    // smaller w pi / 2 with sin(w pi / 2) >= w.
+    const double boundSine = std::sqrt(1.0 - maxCosine * maxCosine);
+    double turnSines[Dim + 1]; // per facet, the sine of the largest turn of its normal
+    std::fill(turnSines, turnSines + Dim + 1, 1.0);
     for (int i = 0; i <= Dim; ++i)
     {
       for (int j = i + 1; j <= Dim; ++j)
@@ -445,59 +486,46 @@ double SimplexSlack(const double* const (&corners)[Dim + 1], double maxCondition
         {
           product += t.Normals[i][r] * t.Normals[j][r];
         }
-        largestCosine = std::max(largestCosine, -product / (lengths[i] * lengths[j]));
+        const double cosine = std::min(1.0, -product / (lengths[i] * lengths[j]) + Margin);
+        const double sine = std::sqrt(1.0 - cosine * cosine);
+        const double leadSine = sine * maxCosine - cosine * boundSine - Margin;
+        const double leadCosine = cosine * maxCosine + sine * boundSine;
+        if (!(leadSine > 0.0))
+        {
+          return 0.0;
+        }
+        const double lead = leadCosine >= 0.0 ? leadSine : 1.0;
+        const double share = rates[i] / (rates[i] + rates[j]);
+        turnSines[i] = std::min(turnSines[i], share * lead);
+        turnSines[j] = std::min(turnSines[j], (1.0 - share) * lead);
       }
     }
-    largestCosine = std::min(1.0, largestCosine + Margin);
-    // The smallest angle's lead over the bound, d = acos(largestCosine) - acos(maxCosine), as
-    // sin d and cos d; every normal may turn by d / 2, and sin(d / 2) >= sin(d) / 2 for d up to
-    // pi / 2, sin(d / 2) >= sin(pi / 4) beyond.
-    const double sine = std::sqrt(1.0 - largestCosine * largestCosine);
-    const double boundSine = std::sqrt(1.0 - maxCosine * maxCosine);
-    const double leadSine = sine * maxCosine - largestCosine * boundSine - Margin;
-    const double leadCosine = largestCosine * maxCosine + sine * boundSine;
-    if (!(leadSine > 0.0))
+    // Per facet k the largest R with eps_k <= |n_k| sin(turn_k).
+    double slack = std::numeric_limits<double>::infinity();
+    for (int k = 0; k <= Dim; ++k)
     {
-      return 0.0;
-    }
-    const double halfSine = leadCosine >= 0.0 ? 0.5 * leadSine : 0.7071;
-    // Per facet k the largest R with eps_k <= |n_k| sin(d / 2); faceEdges is the largest
-    // |u| + |v| of a facet (what multiplies R in every normal's change).
-    double slack = shortest * halfSine;
-    double faceEdges = 0.0;
-    if constexpr (Dim == 3)
-    {
-      constexpr int Edges[4][3] = { { 3, 4, 5 }, { 1, 2, 5 }, { 0, 2, 4 }, { 0, 1, 3 } };
-      double edgeLengths[6];
-      for (int k = 0; k < 6; ++k)
+      const double turn = lengths[k] * turnSines[k]; // the largest change of n_k
+      if constexpr (Dim == 2)
       {
-        edgeLengths[k] = std::sqrt(t.EdgeSquared[k]);
+        slack = std::min(slack, turn);
       }
-      slack = std::numeric_limits<double>::infinity();
-      for (int k = 0; k <= Dim; ++k)
+      else
       {
-        const double a = edgeLengths[Edges[k][0]], b = edgeLengths[Edges[k][1]],
-                     c = edgeLengths[Edges[k][2]];
-        const double sum = a + b + c - std::max(a, std::max(b, c));
-        faceEdges = std::max(faceEdges, sum);
-        const double turn = lengths[k] * halfSine; // the largest change of n_k
-        slack = std::min(slack, turn / (0.5 * sum + std::sqrt(0.25 * sum * sum + turn)));
+        const double longestOfFace = faceLongest[k];
+        slack = std::min(slack,
+          2.0 * turn /
+            (longestOfFace + std::sqrt(longestOfFace * longestOfFace + turn * (4.0 / 3.0))));
       }
     }
     const double longest = std::sqrt(t.LongestEdgeSquared);
     // The condition number: the bound grows with R; the largest R in [0, slack] that keeps it,
     // from the angle's slack, found by regula falsi (below).
-    constexpr double EdgeCount = Dim * (Dim + 1) / 2;
     const double edgeRoot = std::sqrt(t.EdgeSum), normalRoot = std::sqrt(t.NormalSum);
     const double limit = detail::ConditionScale<Dim>() * maxCondition * (1.0 - Margin);
-    double corner0 = 0.0; // what multiplies R in the determinant's change
-    if constexpr (Dim == 2)
+    double largestNormal = 0.0; // the determinant's largest gradient
+    for (int i = 0; i <= Dim; ++i)
     {
-      corner0 = lengths[1] + lengths[2];
-    }
-    else
-    {
-      corner0 = lengths[1] + lengths[2] + lengths[3];
+      largestNormal = std::max(largestNormal, lengths[i]);
     }
     // At a distance r: limit det(r) - the product of the bounds of the edge and normal sums,
     // which must be >= 0 with det(r) > 0. It is concave in r (the product of the growing bounds
@@ -510,13 +538,13 @@ double SimplexSlack(const double* const (&corners)[Dim + 1], double maxCondition
     };
     auto bound = [&](double r)
     {
-      const double normalChange = Dim == 2 ? r : (faceEdges + r) * r;
-      const double determinant = Dim == 2 ? t.Determinant - (corner0 + r) * r
-                                          : t.Determinant - (corner0 + (3.0 * longest + r) * r) * r;
+      const double rootOfDim = Dim == 2 ? 1.4142135623730951 : 1.7320508075688772;
+      const double normalChange = Dim == 2 ? rootOfDim * r : rootOfDim * (longest + r / 3.0) * r;
+      const double determinant = Dim == 2
+        ? t.Determinant - (largestNormal + r / 3.0) * r
+        : t.Determinant - (largestNormal + (0.375 * longest + r / 16.0) * r) * r;
       return Bound{ determinant,
-        limit * determinant -
-          (edgeRoot + std::sqrt(EdgeCount) * r) *
-            (normalRoot + std::sqrt(static_cast<double>(Dim + 1)) * normalChange) };
+        limit * determinant - (edgeRoot + rootOfDim * r) * (normalRoot + normalChange) };
     };
     const Bound atSlack = bound(slack);
     if (!atSlack.Keeps())

@@ -59,7 +59,9 @@
 //   decisions are those of the exact figures. The slack is a distance that the moves of the
 //   cell's corners may add up to before it must be tested again: a move shorter than the slack
 //   of each of its cells needs no measure at all, only the subtraction (AAL, 116 labels: 79% of
-//   the cells of a move; the 20 iterations 35 s -> 22.5 s, the same points bit for bit).
+//   the cells of a move; the 20 iterations 35 s -> 22.5 s, the same points bit for bit). The
+//   slack's bounds take one corner's move at a time (since 2026-12-05: 39% fewer slacks
+//   computed for the same moves; docs/performance.md, "Larger slacks").
 // - MaxDisplacement > 0 clips the displacement from the original position to that length. The
 //   projector, when given, moves each tentative surface position (e.g. onto f = 0) before the
 //   validation; when it fails, that tentative position is rejected.
