@@ -427,6 +427,109 @@ void ForEachPiece(int caseIndex, CutSide allZeroSide, GlobalId&& globalId, Visit
   pull(pull, zero, positive, negative | star, 0, CutSide::Outside);
 }
 
+/// The rank of edge (a, b) among a simplex's edges in the (min, max) order of its corners'
+/// distinct numbers: the order of the cut vertices MarchingSimplices numbers by their edges.
+template <int Dim, class Number>
+int EdgeRank(const Number* numbers, int a, int b)
+{
+  const auto key = std::minmax(numbers[a], numbers[b]);
+  int count = 0;
+  for (int c = 0; c <= Dim; ++c)
+  {
+    for (int d = c + 1; d <= Dim; ++d)
+    {
+      count += std::minmax(numbers[c], numbers[d]) < key ? 1 : 0;
+    }
+  }
+  return count;
+}
+
+/// ForEachPiece's pieces of every case for every order of the corners' global numbers, with
+/// the cut vertices numbered after all corners in the (min, max) order of their edges' numbers
+/// (MarchingSimplices' numbering, and VertexSnap's per cell). The pulling triangulation depends
+/// on nothing else, so callers that cut single simplices over and over (VertexSnap's quality
+/// figures) look the pieces up instead of recursing. All-zero cases give the whole simplex on
+/// the inside. Built once, on first use; up to 3D (4D: 29,160 entries).
+template <int Dim>
+class PieceTable
+{
+public:
+  static_assert(Dim >= 1 && Dim <= 3, "piece tables are built for dimensions 1 to 3");
+  using Info = SimplexCutInfo<Dim>;
+  static constexpr int Vertices = Dim + 1;
+  /// Orders of Dim + 1 distinct numbers: (Dim + 1)!.
+  static constexpr int Orders = Dim == 1 ? 2 : Dim == 2 ? 6 : 24;
+  /// Both sides' pieces.
+  static constexpr int MaxPieces = 2 * Info::MaxPieceSimplices;
+
+  struct Entry
+  {
+    std::int8_t Count = 0;
+    std::array<std::array<PieceVertex, Vertices>, MaxPieces> Pieces{};
+    std::array<CutSide, MaxPieces> Sides{};
+  };
+
+  static const PieceTable& Get()
+  {
+    static const PieceTable table;
+    return table;
+  }
+
+  /// The order index (0 to Orders - 1, a Lehmer code) of Dim + 1 distinct numbers.
+  template <class Number>
+  static int OrderOf(const Number* numbers)
+  {
+    int order = 0;
+    for (int k = 0; k < Vertices; ++k)
+    {
+      int smallerAfter = 0;
+      for (int j = k + 1; j < Vertices; ++j)
+      {
+        smallerAfter += numbers[j] < numbers[k] ? 1 : 0;
+      }
+      order = order * (Vertices - k) + smallerAfter;
+    }
+    return order;
+  }
+
+  const Entry& Of(int caseIndex, int order) const
+  {
+    return this->Entries[static_cast<std::size_t>(caseIndex * Orders + order)];
+  }
+
+private:
+  PieceTable()
+  {
+    this->Entries.resize(static_cast<std::size_t>(Info::Cases * Orders));
+    std::array<int, Vertices> numbers{};
+    for (int v = 0; v < Vertices; ++v)
+    {
+      numbers[v] = v;
+    }
+    do
+    {
+      auto number = [&](const PieceVertex& vertex) -> std::int64_t
+      {
+        return vertex.IsCut() ? Vertices + EdgeRank<Dim>(numbers.data(), vertex.A, vertex.B)
+                              : numbers[vertex.A];
+      };
+      const int order = OrderOf(numbers.data());
+      for (int caseIndex = 0; caseIndex < Info::Cases; ++caseIndex)
+      {
+        Entry& entry = this->Entries[static_cast<std::size_t>(caseIndex * Orders + order)];
+        ForEachPiece<Dim>(caseIndex, CutSide::Inside, number,
+          [&](const PieceVertex* simplex, CutSide side)
+          {
+            std::copy(simplex, simplex + Vertices, entry.Pieces[entry.Count].begin());
+            entry.Sides[entry.Count++] = side;
+          });
+      }
+    } while (std::next_permutation(numbers.begin(), numbers.end()));
+  }
+
+  std::vector<Entry> Entries;
+};
+
 struct MarchingSimplicesOptions
 {
   /// The separating surface is f = IsoValue; f < IsoValue is inside.

@@ -304,6 +304,99 @@ TYPED_TEST(PieceOrientationTest, SignsAreTheBarycentricDeterminants)
 }
 
 template <class T>
+class PieceTableTest : public ::testing::Test
+{
+};
+TYPED_TEST_SUITE(PieceTableTest, TableDimensions);
+
+// The piece table holds exactly ForEachPiece's pieces (vertices, order and sides) for every
+// case and every order of the corners' numbers, with the cut vertices numbered after all
+// points in the sorted order of their edges as MarchingSimplices numbers them; the order
+// index numbers the (D + 1)! orders without a gap.
+TYPED_TEST(PieceTableTest, EntriesAreThePullingPiecesOfEveryOrder)
+{
+  constexpr int D = TypeParam::value;
+  using Table = stm::PieceTable<D>;
+  using Info = stm::SimplexCutInfo<D>;
+  const Table& table = Table::Get();
+  std::mt19937_64 random(31 + D);
+  std::uniform_int_distribution<std::int64_t> id(0, 999999);
+  constexpr std::int64_t cutBase = 1000000;
+  std::set<int> orders;
+  int compared = 0;
+  for (int trial = 0; trial < 3; ++trial)
+  {
+    std::vector<std::int64_t> ids;
+    while (static_cast<int>(ids.size()) < D + 1)
+    {
+      const std::int64_t candidate = id(random);
+      if (std::find(ids.begin(), ids.end(), candidate) == ids.end())
+      {
+        ids.push_back(candidate);
+      }
+    }
+    std::sort(ids.begin(), ids.end());
+    do
+    {
+      // The cell's edges sorted by (min, max) of their ends' numbers: the cut vertices' order.
+      std::vector<std::pair<std::int64_t, std::int64_t>> edges;
+      for (int a = 0; a <= D; ++a)
+      {
+        for (int b = a + 1; b <= D; ++b)
+        {
+          edges.push_back(std::minmax(ids[a], ids[b]));
+        }
+      }
+      std::sort(edges.begin(), edges.end());
+      auto globalId = [&](const stm::PieceVertex& v)
+      {
+        if (!v.IsCut())
+        {
+          return ids[v.A];
+        }
+        const std::pair<std::int64_t, std::int64_t> edge = std::minmax(ids[v.A], ids[v.B]);
+        return cutBase + (std::lower_bound(edges.begin(), edges.end(), edge) - edges.begin());
+      };
+      const int order = Table::OrderOf(ids.data());
+      ASSERT_GE(order, 0);
+      ASSERT_LT(order, Table::Orders);
+      orders.insert(order);
+      for (int caseIndex = 0; caseIndex < Info::Cases; ++caseIndex)
+      {
+        std::vector<stm::PieceVertex> expected;
+        std::vector<CutSide> sides;
+        stm::ForEachPiece<D>(caseIndex, CutSide::Inside, globalId,
+          [&](const stm::PieceVertex* simplex, CutSide side)
+          {
+            expected.insert(expected.end(), simplex, simplex + D + 1);
+            sides.push_back(side);
+          });
+        const typename Table::Entry& entry = table.Of(caseIndex, order);
+        ASSERT_EQ(static_cast<std::size_t>(entry.Count), sides.size()) << "case " << caseIndex;
+        EXPECT_EQ(static_cast<int>(entry.Count),
+          caseIndex == Info::AllZeroCase()
+            ? 1
+            : std::max(1, Info::InsideSimplices[caseIndex] + Info::OutsideSimplices[caseIndex]));
+        for (int piece = 0; piece < entry.Count; ++piece)
+        {
+          EXPECT_EQ(entry.Sides[piece], sides[piece]);
+          for (int v = 0; v <= D; ++v)
+          {
+            EXPECT_EQ(entry.Pieces[piece][v].A, expected[piece * (D + 1) + v].A);
+            EXPECT_EQ(entry.Pieces[piece][v].B, expected[piece * (D + 1) + v].B);
+          }
+        }
+        ++compared;
+      }
+    } while (std::next_permutation(ids.begin(), ids.end()));
+  }
+  EXPECT_EQ(static_cast<int>(orders.size()), Table::Orders);
+  EXPECT_EQ(*orders.begin(), 0);
+  EXPECT_EQ(*orders.rbegin(), Table::Orders - 1);
+  EXPECT_EQ(compared, 3 * Table::Orders * Info::Cases);
+}
+
+template <class T>
 class MarchingSimplicesMeshTest : public ::testing::Test
 {
 };
