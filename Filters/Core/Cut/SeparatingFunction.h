@@ -146,7 +146,9 @@ Status BodyIndicator(
     void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
     {
       const Spacetree<Dim>& tree = *this->Tree;
-      for (std::int64_t leaf = begin; leaf < end && !this->Exec->ShouldAbort(); ++leaf)
+      // Abort is polled every 256 leaves: each poll asks VTK which thread this is.
+      for (std::int64_t leaf = begin;
+           leaf < end && ((leaf - begin) % 256 != 0 || !this->Exec->ShouldAbort()); ++leaf)
       {
         if (tree.LeafMaterials[leaf] == BackgroundMaterial)
         {
