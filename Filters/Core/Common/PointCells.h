@@ -259,17 +259,58 @@ struct PointCells
         entries.push_back(entry);
       }
     }
-    std::sort(entries.begin(), entries.end());
-    for (std::size_t first = 0; first < entries.size();)
+    auto visitGroups = [&visit](const FacetEntry* sorted, std::size_t count)
     {
-      std::size_t last = first + 1;
-      while (last < entries.size() && entries[last].SameFacet(entries[first]))
+      for (std::size_t first = 0; first < count;)
       {
-        ++last;
+        std::size_t last = first + 1;
+        while (last < count && sorted[last].SameFacet(sorted[first]))
+        {
+          ++last;
+        }
+        visit(sorted + first, sorted + last);
+        first = last;
       }
-      visit(entries.data() + first, entries.data() + last);
-      first = last;
+    };
+    // Up to 3D the other points fit one 64-bit key (ids below 2^32), and the entries come in
+    // ascending cells: a stable insertion sort of the keys gives operator<'s order, moving
+    // 8-byte keys and 1-byte indices instead of 32-byte entries (AAL brain mask: the
+    // smoother's facet pass 0.63-0.71 -> 0.49-0.55 s).
+    constexpr std::size_t PackedLimit = 64;
+    if constexpr (FacetEntry::OtherPoints <= 2)
+    {
+      if (entries.size() <= PackedLimit && this->Offsets.size() <= (std::size_t{ 1 } << 32))
+      {
+        const std::size_t count = entries.size();
+        std::uint64_t keys[PackedLimit];
+        std::uint8_t order[PackedLimit];
+        for (std::size_t i = 0; i < count; ++i)
+        {
+          std::uint64_t key = 0;
+          for (int k = 0; k < FacetEntry::OtherPoints; ++k)
+          {
+            key = (key << 32) | static_cast<std::uint64_t>(entries[i].Others[k]);
+          }
+          std::size_t j = i;
+          for (; j > 0 && keys[j - 1] > key; --j)
+          {
+            keys[j] = keys[j - 1];
+            order[j] = order[j - 1];
+          }
+          keys[j] = key;
+          order[j] = static_cast<std::uint8_t>(i);
+        }
+        FacetEntry sorted[PackedLimit];
+        for (std::size_t i = 0; i < count; ++i)
+        {
+          sorted[i] = entries[order[i]];
+        }
+        visitGroups(sorted, count);
+        return;
+      }
     }
+    std::sort(entries.begin(), entries.end());
+    visitGroups(entries.data(), entries.size());
   }
 };
 

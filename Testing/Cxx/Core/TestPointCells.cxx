@@ -3,7 +3,7 @@
 // once with the cells that FacetNeighbour pairs, and without it once from each of the facet's
 // points, on Kuhn triangulations of cube grids (2D, 3D and 4D: conforming, with outer-boundary
 // facets), a chain of segments (1D) and a non-manifold fan (three triangles on one edge); and
-// the parallel Build gives the serial rows.
+// the parallel Build gives the serial rows; the visits come in ascending order.
 
 #include "Common/PointCells.h"
 
@@ -110,6 +110,77 @@ TEST(PointCells, EachFacetOnceFromItsSmallestPoint)
       }
     });
   EXPECT_EQ(shared, (std::vector<std::int64_t>{ 0, 1, 2 }));
+}
+
+/// ForEachFacetAt visits the facets in ascending order of their other points and each facet's
+/// cells in ascending order (FacetEntry's operator<), by the packed sort of up to 64 entries as
+/// by std::sort beyond: every entry of the point's cells once.
+template <int Dim>
+void CheckVisitOrder(const std::vector<std::int64_t>& connectivity, std::int64_t numberOfPoints,
+  std::array<std::int64_t, 2>& packedAndBeyond)
+{
+  constexpr int Corners = Dim + 1;
+  using Entry = typename stm::PointCells<Dim>::FacetEntry;
+  const auto cells = static_cast<std::int64_t>(connectivity.size()) / Corners;
+  stm::PointCells<Dim> incidence;
+  incidence.Build(connectivity.data(), cells, numberOfPoints);
+  std::vector<Entry> entries;
+  for (const bool smallestOnly : { true, false })
+  {
+    std::int64_t visited = 0;
+    for (std::int64_t p = 0; p < numberOfPoints; ++p)
+    {
+      std::vector<Entry> sequence;
+      incidence.ForEachFacetAt(
+        connectivity.data(), p, smallestOnly, entries, [](std::int64_t, int) { return true; },
+        [&](const Entry* first, const Entry* last)
+        {
+          for (const Entry* entry = first; entry != last; ++entry)
+          {
+            ASSERT_TRUE(entry->SameFacet(*first));
+          }
+          if (!sequence.empty())
+          {
+            ASSERT_FALSE(sequence.back().SameFacet(*first));
+          }
+          sequence.insert(sequence.end(), first, last);
+        });
+      ASSERT_TRUE(std::is_sorted(sequence.begin(), sequence.end()));
+      for (std::size_t i = 1; i < sequence.size(); ++i)
+      {
+        ASSERT_TRUE(sequence[i - 1] < sequence[i]) << "point " << p << ", entry " << i;
+      }
+      ++packedAndBeyond[sequence.size() <= 64 ? 0 : 1];
+      visited += static_cast<std::int64_t>(sequence.size());
+    }
+    // Each facet side once from its smallest point, or once from each of its Dim points.
+    EXPECT_EQ(visited, cells * Corners * (smallestOnly ? 1 : Dim));
+  }
+}
+
+TEST(PointCells, VisitsFacetsInAscendingOrder)
+{
+  std::int64_t points = 0;
+  std::array<std::int64_t, 2> packedAndBeyond = { 0, 0 };
+  const std::vector<std::int64_t> grid2 = stmtest::KuhnGrid<2>(6, points);
+  CheckVisitOrder<2>(grid2, points, packedAndBeyond);
+  EXPECT_EQ(packedAndBeyond[1], 0);
+  // 3D: the inner points' 24 cells give 72 entries without smallestOnly, beyond the packed
+  // sort.
+  const std::vector<std::int64_t> grid3 = stmtest::KuhnGrid<3>(4, points);
+  CheckVisitOrder<3>(grid3, points, packedAndBeyond);
+  EXPECT_EQ(packedAndBeyond[1], 27);
+  // 40 triangles around point 0, in a shuffled order of their outer points: 80 entries at
+  // point 0, the smallest point of all its facets, with smallestOnly and without.
+  std::vector<std::int64_t> fan;
+  for (std::int64_t i = 0; i < 40; ++i)
+  {
+    const std::int64_t a = 1 + (i * 17) % 41, b = 1 + (i * 17 + 1) % 41;
+    fan.insert(fan.end(), { b, 0, a });
+  }
+  CheckVisitOrder<2>(fan, 42, packedAndBeyond);
+  EXPECT_EQ(packedAndBeyond[1], 29);
+  EXPECT_GT(packedAndBeyond[0], 0);
 }
 
 /// The parallel Build gives the serial one's rows, on any number of threads, for a mesh large
