@@ -37,6 +37,9 @@
 #include "stmSpacetreeBalance.h"
 #include "stmSpacetreeTessellate.h"
 #include "stmVertexSnap.h"
+#include "stmXMLPUnstructuredGridWriter.h"
+#include "stmXMLPolyDataWriter.h"
+#include "stmXMLUnstructuredGridWriter.h"
 #include "stmeshErrors.h"
 #include "stmeshImageInput.h"
 #include "stmeshParallel.h"
@@ -83,9 +86,6 @@
 #include "vtkUnstructuredGridWriter.h"
 #include "vtkVariant.h"
 #include "vtkVersion.h"
-#include "vtkXMLPUnstructuredGridWriter.h"
-#include "vtkXMLPolyDataWriter.h"
-#include "vtkXMLUnstructuredGridWriter.h"
 #include "vtkXMLWriter.h"
 
 #include <sched.h>
@@ -378,8 +378,8 @@ Arguments:
                         spacetree's cell size per level (in voxels) and the per-material counts
                         as JSON.
   --compressor C        compression of .vtu and .vtp files: lz4 (the default, fastest), zlib
-                        (files about 2.3 times smaller, written about 1 s slower per 5 million
-                        tetrahedra) or none.
+                        (files about 2.3 times smaller, written about 0.8 s slower per 5
+                        million tetrahedra on two threads) or none.
   --interfaces FILE     also write the interfaces of the output mesh to FILE (.vtp, VTK XML
                         polydata, or .vtk, legacy): every facet between two materials and every
                         outer-boundary facet of a non-background cell, once each (triangles; lines
@@ -2475,9 +2475,9 @@ void ConfigureXMLWriter(vtkXMLWriter* writer, const std::string& compressor)
 {
   // Inline binary, never appended: Debian 12's libexpat fails on appended-mode files.
   writer->SetDataModeToBinary();
-  // The writer compresses and base64-encodes on one thread, so the compressor sets the write
-  // time: LZ4 is the fastest; zlib at level 1 (about twice as fast as its default level 5,
-  // files ~2% larger) makes files about 2.3 times smaller than LZ4.
+  // The compressor sets most of the write time (compressed on all threads by the stm writers):
+  // LZ4 is the fastest; zlib at level 1 (about twice as fast as its default level 5, files ~2%
+  // larger) makes files about 2.3 times smaller than LZ4.
   if (compressor == "zlib")
   {
     writer->SetCompressorTypeToZLib();
@@ -2498,7 +2498,8 @@ void ConfigureXMLWriter(vtkXMLWriter* writer, const std::string& compressor)
   writer->SetHeaderTypeToUInt64();
 }
 
-/// Writes a mesh with an XML writer (vtkXMLUnstructuredGridWriter or vtkXMLPolyDataWriter).
+/// Writes a mesh with an XML writer (stmXMLUnstructuredGridWriter or stmXMLPolyDataWriter: VTK's
+/// files, encoded on all threads).
 template <class Writer>
 int WriteXML(vtkDataObject* mesh, const std::string& path, const std::string& compressor,
   unsigned long& errorCode)
@@ -2640,10 +2641,10 @@ void WriteMesh(vtkPointSet* mesh, const std::string& path, MeshFormat format,
   {
     case MeshFormat::XMLUnstructuredGrid:
       written =
-        WriteXML<vtkXMLUnstructuredGridWriter>(mesh, temporary.GetPath(), compressor, errorCode);
+        WriteXML<stmXMLUnstructuredGridWriter>(mesh, temporary.GetPath(), compressor, errorCode);
       break;
     case MeshFormat::XMLPolyData:
-      written = WriteXML<vtkXMLPolyDataWriter>(mesh, temporary.GetPath(), compressor, errorCode);
+      written = WriteXML<stmXMLPolyDataWriter>(mesh, temporary.GetPath(), compressor, errorCode);
       break;
     case MeshFormat::PartitionedXML:
       throw Failure(context + ": a .pvtu is written in pieces (WritePieces)");
@@ -2707,7 +2708,7 @@ void WritePieces(vtkPointSet* mesh, const std::string& path, const std::string& 
 {
   const std::string context = "writing '" + path + "'";
   const Clock::time_point start = Clock::now();
-  vtkNew<vtkXMLPUnstructuredGridWriter> writer;
+  vtkNew<stmXMLPUnstructuredGridWriter> writer;
   Watch(writer);
   writer->SetInputData(mesh);
   writer->SetFileName(path.c_str());
