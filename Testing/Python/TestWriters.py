@@ -8,7 +8,8 @@
   in a group named from the label table (stmLabelTable on the mesh's field data).
 - spacetreemesh.report.write_report makes the visual report of a mesh in memory.
 - The wrapped classes used VTK-style: stmLabelTable reads an atlas's label file, a writer
-  reports a clear error for a mesh of polygons and leaves no file behind.
+  reports a clear error for a mesh of polygons and leaves no file behind, and the threaded XML
+  writers write the bytes of VTK's.
 """
 import os
 import xml.etree.ElementTree as ET
@@ -20,7 +21,7 @@ from paraview.simple import LoadPlugin, PVTrivialProducer, SaveData
 import spacetreemesh
 import stmtesting as T
 from vtkmodules.vtkCommonCore import vtkPoints
-from vtkmodules.vtkCommonDataModel import VTK_POLYGON, VTK_WEDGE, vtkUnstructuredGrid
+from vtkmodules.vtkCommonDataModel import VTK_POLYGON, VTK_WEDGE, vtkPolyData, vtkUnstructuredGrid
 
 PLUGIN = T.env("STM_PLUGIN")
 LoadPlugin(PLUGIN, ns=globals())
@@ -191,6 +192,34 @@ for name in ("stmGmshWriter", "stmMeditWriter", "stmAbaqusWriter", "stmFEBioWrit
     T.check(not os.path.exists(path) and not [f for f in os.listdir(os.path.dirname(path))
                                               if f.startswith("polygons_" + name)],
             "%s left a file behind" % name)
+# The threaded XML writers from Python: the bytes of VTK's own writers.
+from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter, vtkXMLUnstructuredGridWriter  # noqa: E402
+
+
+def xml_bytes(writer_class, data):
+    writer = writer_class()
+    writer.SetInputData(data)
+    writer.SetWriteToOutputString(True)
+    writer.SetDataModeToBinary()
+    writer.SetCompressorTypeToLZ4()
+    writer.SetBlockSize(256)  # several blocks even for this small mesh
+    T.check_equal(writer.Write(), 1, "%s writes" % writer.GetClassName())
+    return writer.GetOutputString()
+
+
+T.check(xml_bytes(spacetreemesh.stmXMLUnstructuredGridWriter, named_grid) ==
+        xml_bytes(vtkXMLUnstructuredGridWriter, named_grid),
+        "stmXMLUnstructuredGridWriter writes what vtkXMLUnstructuredGridWriter does")
+surface = vtkPolyData()
+surface.SetPoints(corners)
+surface.Allocate(1)
+surface.InsertNextCell(VTK_POLYGON, 5, [0, 1, 2, 4, 3])
+T.check(xml_bytes(spacetreemesh.stmXMLPolyDataWriter, surface) ==
+        xml_bytes(vtkXMLPolyDataWriter, surface),
+        "stmXMLPolyDataWriter writes what vtkXMLPolyDataWriter does")
+T.check(spacetreemesh.stmXMLUnstructuredGridWriter().IsA("vtkXMLUnstructuredGridWriter"),
+        "stmXMLUnstructuredGridWriter is a vtkXMLUnstructuredGridWriter")
+
 # The visual report as a function (what stmesh --report runs): its figures count the mesh.
 from spacetreemesh import report  # noqa: E402
 report_directory = T.temp_path("report")
