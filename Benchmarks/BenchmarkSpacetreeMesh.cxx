@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Timings of the stages on the AAL atlas (181 x 217 x 181 voxels, 116 labels), each stage alone
-// on the output of the previous one, and the first three together. Run with
+// on the output of the previous one, the first three together, and the .vtu write. Run with
 //   BenchmarkSpacetreeMesh --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 // The SMP backend is STDThread; VTK_SMP_MAX_THREADS or --threads=N (first argument) limit it.
 
@@ -8,13 +8,20 @@
 #include "stmMarchingSimplices.h"
 #include "stmSpacetreeBalance.h"
 #include "stmSpacetreeTessellate.h"
+#include "stmXMLUnstructuredGridWriter.h"
 
+#include "vtkCellArray.h"
+#include "vtkCellData.h"
 #include "vtkImageData.h"
 #include "vtkNIFTIImageReader.h"
 #include "vtkNew.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
 #include "vtkSMPTools.h"
 #include "vtkSmartPointer.h"
+#include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
+#include "vtkXMLUnstructuredGridWriter.h"
 
 #include <benchmark/benchmark.h>
 
@@ -155,6 +162,63 @@ void BM_MarchingSimplices(benchmark::State& state)
     static_cast<double>(mesh->GetNumberOfCells()), benchmark::Counter::kIsIterationInvariantRate);
 }
 
+/// Marks every array of the mesh modified, so that a writer computes the ranges and the distinct
+/// cell types again instead of finding them cached from the previous iteration.
+void ForgetCachedRanges(vtkUnstructuredGrid* mesh)
+{
+  for (vtkDataSetAttributes* data : { static_cast<vtkDataSetAttributes*>(mesh->GetPointData()),
+         static_cast<vtkDataSetAttributes*>(mesh->GetCellData()) })
+  {
+    for (int array = 0; array < data->GetNumberOfArrays(); ++array)
+    {
+      data->GetAbstractArray(array)->Modified();
+    }
+  }
+  mesh->GetPoints()->GetData()->Modified();
+  mesh->GetCells()->GetConnectivityArray()->Modified();
+  mesh->GetCells()->GetOffsetsArray()->Modified();
+  mesh->GetCellTypesArray()->Modified();
+}
+
+/// Writing the cut mesh of the atlas (the same as BM_MarchingSimplices's volume output) to a
+/// string as stmesh writes its .vtu: inline binary, LZ4, blocks of 1 MiB, 64-bit headers; with
+/// VTK's writer (0) or stmXMLUnstructuredGridWriter (1), which write the same bytes.
+void BM_XMLWrite(benchmark::State& state)
+{
+  vtkNew<stmSpacetreeTessellate> tessellate;
+  tessellate->SetInputData(Spacetree(1));
+  vtkNew<stmMarchingSimplices> cut;
+  cut->SetInputConnection(tessellate->GetOutputPort());
+  cut->Update();
+  vtkUnstructuredGrid* mesh = vtkUnstructuredGrid::SafeDownCast(cut->GetOutputDataObject(0));
+  vtkSmartPointer<vtkXMLUnstructuredGridWriter> writer;
+  if (state.range(0) == 0)
+  {
+    writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
+  }
+  else
+  {
+    writer = vtkSmartPointer<stmXMLUnstructuredGridWriter>::New();
+  }
+  writer->SetInputData(mesh);
+  writer->SetWriteToOutputString(true);
+  writer->SetDataModeToBinary();
+  writer->SetCompressorTypeToLZ4();
+  writer->SetBlockSize(1 << 20);
+  writer->SetHeaderTypeToUInt64();
+  size_t bytes = 0;
+  for (auto _ : state)
+  {
+    ForgetCachedRanges(mesh);
+    writer->Write();
+    bytes = writer->GetOutputString().size();
+  }
+  state.counters["tetrahedra"] = static_cast<double>(mesh->GetNumberOfCells());
+  state.counters["bytes"] = static_cast<double>(bytes);
+  state.counters["tetrahedra/s"] = benchmark::Counter(
+    static_cast<double>(mesh->GetNumberOfCells()), benchmark::Counter::kIsIterationInvariantRate);
+}
+
 BENCHMARK(BM_ImageToSpacetree)
   ->Arg(stmImageToSpacetree::NO_THIN_PARTS)
   ->Arg(stmImageToSpacetree::THIN_BODY_PARTS)
@@ -175,6 +239,7 @@ BENCHMARK(BM_SpacetreeTessellate)
   ->UseRealTime();
 BENCHMARK(BM_AllThreeStages)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MarchingSimplices)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_XMLWrite)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 } // namespace
 
 int main(int argc, char** argv)
