@@ -2749,10 +2749,19 @@ std::map<long long, long long> CountCellsPerMaterial(vtkPointSet* mesh)
   {
     return counts;
   }
+  // The cells of a material come in runs: the last material's count is kept at hand.
   const vtkIdType count = materials->GetNumberOfTuples();
+  long long lastMaterial = 0;
+  long long* lastCount = nullptr;
   for (vtkIdType cell = 0; cell < count; ++cell)
   {
-    ++counts[static_cast<long long>(materials->GetTuple1(cell))];
+    const long long material = static_cast<long long>(materials->GetTuple1(cell));
+    if (!lastCount || material != lastMaterial)
+    {
+      lastCount = &counts[material];
+      lastMaterial = material;
+    }
+    ++*lastCount;
   }
   return counts;
 }
@@ -3244,14 +3253,22 @@ MeshQuality MeasureMeshQuality(vtkPointSet* mesh)
       vtkMath::Cross(normal, frame[0], frame[1]);
     }
   }
+  // The smallest dihedral angle is the angle of the largest cosine (DihedralDegrees is
+  // monotone): one acos per thread instead of one per cell. The cells of a material come in
+  // runs, so the volume of the last material is kept at hand instead of looked up per cell.
   struct Partial
   {
     double Worst = 0.0;
-    double Smallest = 180.0;
+    double LargestCosine = -1.0;
     long long Inverted = 0;
     std::map<long long, double> Volumes;
+    long long LastMaterial = 0;
+    double* LastVolume = nullptr;
   };
   vtkSMPThreadLocal<Partial> partials;
+  // Double coordinates (what the pipeline makes) are read in place, others through GetPoint.
+  vtkDoubleArray* doubleCoordinates = vtkDoubleArray::SafeDownCast(grid->GetPoints()->GetData());
+  const double* xyz = doubleCoordinates ? doubleCoordinates->GetPointer(0) : nullptr;
   vtkSMPTools::For(0, numberOfCells,
     [&](vtkIdType begin, vtkIdType end)
     {
@@ -3260,21 +3277,30 @@ MeshQuality MeasureMeshQuality(vtkPointSet* mesh)
       double coordinates[4][3];
       for (vtkIdType cell = begin; cell < end; ++cell)
       {
-        cells->GetCellAtId(cell, ids);
+        vtkIdType cornerCount = 0;
+        const vtkIdType* cornerIds = nullptr;
+        cells->GetCellAtId(cell, cornerCount, cornerIds, ids);
         for (int v = 0; v < corners; ++v)
         {
-          grid->GetPoint(ids->GetId(v), coordinates[v]);
+          if (xyz)
+          {
+            std::copy_n(xyz + 3 * cornerIds[v], 3, coordinates[v]);
+          }
+          else
+          {
+            grid->GetPoint(cornerIds[v], coordinates[v]);
+          }
         }
         double measure = 0.0;
-        double condition = 0.0, dihedral = 0.0;
+        double condition = 0.0, cosine = 1.0;
         if (corners == 4)
         {
           const double* pointers[4] = { coordinates[0], coordinates[1], coordinates[2],
             coordinates[3] };
-          const auto shape = stm::MeasureSimplex<3>(pointers);
+          const auto shape = stm::MeasureSimplexCosines<3>(pointers);
           measure = shape.Determinant / 6.0;
           condition = shape.Condition;
-          dihedral = shape.MinDihedralDegrees;
+          cosine = shape.LargestDihedralCosine;
         }
         else
         {
@@ -3285,17 +3311,22 @@ MeshQuality MeasureMeshQuality(vtkPointSet* mesh)
             planar[v][1] = vtkMath::Dot(coordinates[v], frame[1]);
           }
           const double* pointers[3] = { planar[0], planar[1], planar[2] };
-          const auto shape = stm::MeasureSimplex<2>(pointers);
+          const auto shape = stm::MeasureSimplexCosines<2>(pointers);
           measure = shape.Determinant / 2.0;
           condition = shape.Condition;
-          dihedral = shape.MinDihedralDegrees;
+          cosine = shape.LargestDihedralCosine;
         }
         partial.Inverted += measure > 0.0 ? 0 : 1;
         partial.Worst = std::max(partial.Worst, condition);
-        partial.Smallest = std::min(partial.Smallest, dihedral);
+        partial.LargestCosine = std::max(partial.LargestCosine, cosine);
         const long long material =
           materials ? static_cast<long long>(materials->GetComponent(cell, 0)) : 0;
-        partial.Volumes[material] += measure;
+        if (!partial.LastVolume || material != partial.LastMaterial)
+        {
+          partial.LastVolume = &partial.Volumes[material];
+          partial.LastMaterial = material;
+        }
+        *partial.LastVolume += measure;
       }
     });
   quality.Measured = true;
@@ -3303,7 +3334,8 @@ MeshQuality MeasureMeshQuality(vtkPointSet* mesh)
   for (const Partial& partial : partials)
   {
     quality.WorstCondition = std::max(quality.WorstCondition, partial.Worst);
-    quality.SmallestDihedral = std::min(quality.SmallestDihedral, partial.Smallest);
+    quality.SmallestDihedral =
+      std::min(quality.SmallestDihedral, stm::DihedralDegrees(partial.LargestCosine));
     quality.InvertedCells += partial.Inverted;
     for (const auto& entry : partial.Volumes)
     {
