@@ -1,13 +1,18 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Timings of the stages on the AAL atlas (181 x 217 x 181 voxels, 116 labels), each stage alone
-// on the output of the previous one, the first three together, and the .vtu write. Run with
+// on the output of the previous one, the first three together, and the .vtu write. The snap,
+// the cut of every label and the smoothing take their inputs from stmesh's default pipelines
+// (the brain mask, and --materials separate). Run with
 //   BenchmarkSpacetreeMesh --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 // The SMP backend is STDThread; VTK_SMP_MAX_THREADS or --threads=N (first argument) limit it.
 
+#include "stmBoundarySmooth.h"
 #include "stmImageToSpacetree.h"
 #include "stmMarchingSimplices.h"
+#include "stmMultiMaterialCut.h"
 #include "stmSpacetreeBalance.h"
 #include "stmSpacetreeTessellate.h"
+#include "stmVertexSnap.h"
 #include "stmXMLUnstructuredGridWriter.h"
 
 #include "vtkCellArray.h"
@@ -45,12 +50,14 @@ vtkImageData* Atlas()
   return reader->GetOutput();
 }
 
-vtkSmartPointer<vtkUnstructuredGrid> Spacetree(int balanceLevel)
+/// The spacetree of the atlas; by default the staircase tree of the earlier figures
+/// (docs/performance.md), without the cut's refinement of thin parts.
+vtkSmartPointer<vtkUnstructuredGrid> Spacetree(
+  int balanceLevel, int thinParts = stmImageToSpacetree::NO_THIN_PARTS)
 {
   vtkNew<stmImageToSpacetree> tree;
   tree->SetInputData(Atlas());
-  // The staircase tree of the earlier figures (docs/performance.md), not the cut's refinement.
-  tree->SetThinPartRefinement(stmImageToSpacetree::NO_THIN_PARTS);
+  tree->SetThinPartRefinement(thinParts);
   tree->Update();
   auto result = vtkSmartPointer<vtkUnstructuredGrid>::New();
   if (balanceLevel == 0)
@@ -139,6 +146,15 @@ void BM_AllThreeStages(benchmark::State& state)
     benchmark::Counter(static_cast<double>(cells), benchmark::Counter::kIsIterationInvariantRate);
 }
 
+/// The counters of a stage timed on mesh: its cells under `name`, and the cells per second.
+void CountCells(benchmark::State& state, const char* name, vtkDataSet* mesh)
+{
+  const auto cells = static_cast<double>(mesh->GetNumberOfCells());
+  state.counters[name] = cells;
+  state.counters["tetrahedra/s"] =
+    benchmark::Counter(cells, benchmark::Counter::kIsIterationInvariantRate);
+}
+
 /// Marching simplices on the default mesh of the atlas (balance 1, the labels function with its
 /// boundary layer): input tetrahedra per second, volume (0) or surface (1) output.
 void BM_MarchingSimplices(benchmark::State& state)
@@ -156,10 +172,8 @@ void BM_MarchingSimplices(benchmark::State& state)
     cut->Update();
     cells = vtkDataSet::SafeDownCast(cut->GetOutputDataObject(0))->GetNumberOfCells();
   }
-  state.counters["input tetrahedra"] = static_cast<double>(mesh->GetNumberOfCells());
+  CountCells(state, "input tetrahedra", mesh);
   state.counters["output cells"] = static_cast<double>(cells);
-  state.counters["tetrahedra/s"] = benchmark::Counter(
-    static_cast<double>(mesh->GetNumberOfCells()), benchmark::Counter::kIsIterationInvariantRate);
 }
 
 /// Marks every array of the mesh modified, so that a writer computes the ranges and the distinct
@@ -219,6 +233,97 @@ void BM_XMLWrite(benchmark::State& state)
     static_cast<double>(mesh->GetNumberOfCells()), benchmark::Counter::kIsIterationInvariantRate);
 }
 
+/// The tessellation of stmesh's default pipeline: the brain mask's (0: thin parts of the body
+/// refined) or every label's (1: thin parts of every material, as --materials separate).
+vtkSmartPointer<vtkUnstructuredGrid> DefaultTessellation(bool everyLabel)
+{
+  vtkNew<stmSpacetreeTessellate> tessellate;
+  tessellate->SetInputData(Spacetree(1,
+    everyLabel ? stmImageToSpacetree::THIN_MATERIAL_PARTS : stmImageToSpacetree::THIN_BODY_PARTS));
+  tessellate->Update();
+  auto result = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  result->ShallowCopy(tessellate->GetOutput());
+  return result;
+}
+
+/// The mesh the smoothing gets in stmesh's default pipeline: the brain mask's snapped and cut
+/// mesh (0), or the cut of every label (1).
+vtkSmartPointer<vtkUnstructuredGrid> SmoothingInput(bool everyLabel)
+{
+  auto result = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  if (everyLabel)
+  {
+    vtkNew<stmMultiMaterialCut> cut;
+    cut->SetBackgroundMaterial(0);
+    cut->SetInputData(DefaultTessellation(true));
+    cut->Update();
+    result->ShallowCopy(cut->GetOutputDataObject(0));
+    return result;
+  }
+  vtkNew<stmVertexSnap> snap;
+  snap->SetInputData(DefaultTessellation(false));
+  vtkNew<stmMarchingSimplices> cut;
+  cut->SetInputConnection(snap->GetOutputPort());
+  cut->Update();
+  result->ShallowCopy(cut->GetOutputDataObject(0));
+  return result;
+}
+
+/// Quality-driven snapping (stmesh's default) of the brain mask's tessellation: input tetrahedra
+/// per second.
+void BM_VertexSnap(benchmark::State& state)
+{
+  auto mesh = DefaultTessellation(false);
+  vtkIdType snapped = 0;
+  for (auto _ : state)
+  {
+    vtkNew<stmVertexSnap> snap;
+    snap->SetInputData(mesh);
+    snap->Update();
+    snapped = snap->GetNumberOfSnappedPoints();
+  }
+  CountCells(state, "input tetrahedra", mesh);
+  state.counters["snapped points"] = static_cast<double>(snapped);
+}
+
+/// The cut at the interfaces of all 116 labels, snapping before each (stmesh --materials
+/// separate): input tetrahedra per second.
+void BM_MultiMaterialCut(benchmark::State& state)
+{
+  auto mesh = DefaultTessellation(true);
+  vtkIdType cells = 0;
+  for (auto _ : state)
+  {
+    vtkNew<stmMultiMaterialCut> cut;
+    cut->SetBackgroundMaterial(0);
+    cut->SetInputData(mesh);
+    cut->Update();
+    cells = vtkDataSet::SafeDownCast(cut->GetOutputDataObject(0))->GetNumberOfCells();
+  }
+  CountCells(state, "input tetrahedra", mesh);
+  state.counters["output cells"] = static_cast<double>(cells);
+}
+
+/// stmesh's smoothing (20 Taubin iterations) of the brain mask's cut mesh (0) or of the 116
+/// labels' (1, with the labels' volumes restored): tetrahedra per second.
+void BM_BoundarySmooth(benchmark::State& state)
+{
+  const bool everyLabel = state.range(0) != 0;
+  auto mesh = SmoothingInput(everyLabel);
+  vtkIdType moved = 0;
+  for (auto _ : state)
+  {
+    vtkNew<stmBoundarySmooth> smooth;
+    smooth->SetBackgroundMaterial(0);
+    smooth->SetRestoreOriginalVolumes(everyLabel);
+    smooth->SetInputData(mesh);
+    smooth->Update();
+    moved = smooth->GetNumberOfMovedPoints();
+  }
+  CountCells(state, "tetrahedra", mesh);
+  state.counters["moved points"] = static_cast<double>(moved);
+}
+
 BENCHMARK(BM_ImageToSpacetree)
   ->Arg(stmImageToSpacetree::NO_THIN_PARTS)
   ->Arg(stmImageToSpacetree::THIN_BODY_PARTS)
@@ -240,6 +345,9 @@ BENCHMARK(BM_SpacetreeTessellate)
 BENCHMARK(BM_AllThreeStages)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MarchingSimplices)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_XMLWrite)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_VertexSnap)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MultiMaterialCut)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_BoundarySmooth)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 } // namespace
 
 int main(int argc, char** argv)
