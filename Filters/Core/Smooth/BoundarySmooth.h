@@ -1748,7 +1748,7 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
       }
       const std::int64_t first = self.Incidence.Offsets[p], last = self.Incidence.Offsets[p + 1];
       // One pass over the cells per attempt: each cell's new shape is written in place and its
-      // old one kept in the scratch, to be put back if the attempt fails (a few in a hundred).
+      // old one kept in the scratch, to be put back if the attempt fails (about 1 in 100).
       // Written by index: push_back was not inlined here and took 4 % of the 116-label run.
       if (scratch.Shapes.size() < static_cast<std::size_t>(last - first))
       {
@@ -1756,8 +1756,9 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
       }
       Shape* saved = scratch.Shapes.data();
       // The bounds of a measured cell: the worst of the cells before the move, if worse than the
-      // smoother's. Only a cell beyond its slack is measured (about 1 in 40 visits), so they are
-      // found when first needed, from the old shapes: saved up to cell `upTo`, in place after.
+      // smoother's. Only a cell found not surely within the bounds is measured (brain mask: 1
+      // visit in 800), so they are found when first needed, from the old shapes: saved up to
+      // cell `upTo`, in place after.
       double conditionLimit = 0.0, cosineLimit = 0.0;
       bool limitsKnown = false;
       auto findLimits = [&](std::int64_t upTo)
