@@ -227,10 +227,8 @@ void BM_XMLWrite(benchmark::State& state)
     writer->Write();
     bytes = writer->GetOutputString().size();
   }
-  state.counters["tetrahedra"] = static_cast<double>(mesh->GetNumberOfCells());
+  CountCells(state, "tetrahedra", mesh);
   state.counters["bytes"] = static_cast<double>(bytes);
-  state.counters["tetrahedra/s"] = benchmark::Counter(
-    static_cast<double>(mesh->GetNumberOfCells()), benchmark::Counter::kIsIterationInvariantRate);
 }
 
 /// The tessellation of stmesh's default pipeline: the brain mask's (0: thin parts of the body
