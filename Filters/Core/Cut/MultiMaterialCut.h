@@ -590,7 +590,6 @@ private:
   std::vector<std::int32_t> CellMaterials;
   std::vector<std::int64_t> CellParents;
   std::vector<std::int32_t> RemainingIncidence; // per point: remaining cells that use it
-  std::vector<std::int32_t> Incidence;          // per point: cells that use it
   std::vector<double> Points;                   // Dim per point, or empty
   bool SnapVertices = false;
   VertexSnapOptions SnapOptions;
@@ -699,15 +698,14 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const double* poi
   this->CellParents.clear();
   this->CellParents.reserve(roomyCells);
   this->CellParents.resize(static_cast<std::size_t>(numberOfCells));
-  this->Incidence.assign(static_cast<std::size_t>(numberOfPoints), 0);
+  this->RemainingIncidence.assign(static_cast<std::size_t>(numberOfPoints), 0);
   this->LocalIds.assign(static_cast<std::size_t>(numberOfPoints), -1);
   this->Visits.assign(static_cast<std::size_t>(numberOfMaterials), {});
   for (std::int64_t cell = 0; cell < numberOfCells; ++cell)
   {
     this->CellParents[cell] = cell;
-    AdjustIncidence(this->Incidence, this->Cells.data() + cell * (Dim + 1), 1);
+    AdjustIncidence(this->RemainingIncidence, this->Cells.data() + cell * (Dim + 1), 1);
   }
-  this->RemainingIncidence = this->Incidence;
   // Each cell visits the steps of the later materials its points carry: gathered over fixed
   // ranges of cells side by side and joined in range order, so every step's cells ascend
   // whatever the number of threads.
@@ -841,7 +839,6 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const double* poi
     material = material == Remaining ? numberOfMaterials - 1 : material;
   }
   std::vector<std::int32_t>().swap(this->RemainingIncidence);
-  std::vector<std::int32_t>().swap(this->Incidence);
   std::vector<std::int64_t>().swap(this->LocalIds);
   this->InputMaterials = nullptr;
   return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
@@ -1053,7 +1050,6 @@ void MultiMaterialCut<Dim>::CommitStep(StepWork& work)
     }
   }
   this->RemainingIncidence.resize(static_cast<std::size_t>(firstAdded + added), 0);
-  this->Incidence.resize(static_cast<std::size_t>(firstAdded + added), 0);
   this->LocalIds.resize(static_cast<std::size_t>(firstAdded + added), -1);
   auto global = [&](std::int64_t id)
   {
@@ -1085,17 +1081,26 @@ void MultiMaterialCut<Dim>::CommitStep(StepWork& work)
     const std::int64_t slot = cells[parents[first]];
     std::int64_t* slotIds = this->Cells.data() + slot * (Dim + 1);
     const std::int32_t before = this->CellMaterials[slot];
-    if (last - first > 1)
+    if (last - first == 1)
     {
-      ++this->Counts.SplitCells;
-      this->Counts.SplitAssignedCells += before == Remaining ? 0 : 1;
-      this->LaterMaterials(slotIds, step, later);
+      // An unsplit cell is its own piece (MarchingSimplices copies its ids): only its
+      // material can change (AAL, 116 labels: 8.9 of 9.3 million visits; rewriting their ids
+      // and counts made the serial commits 0.55 s, 0.37 s without).
+      if (before == Remaining && static_cast<CutSide>(work.Sides[first]) == CutSide::Inside)
+      {
+        this->CellMaterials[slot] = step;
+        AdjustIncidence(this->RemainingIncidence, slotIds, -1);
+      }
+      first = last;
+      continue;
     }
+    ++this->Counts.SplitCells;
+    this->Counts.SplitAssignedCells += before == Remaining ? 0 : 1;
+    this->LaterMaterials(slotIds, step, later);
     if (before == Remaining)
     {
       AdjustIncidence(this->RemainingIncidence, slotIds, -1);
     }
-    AdjustIncidence(this->Incidence, slotIds, -1);
     const std::int64_t parent = this->CellParents[slot];
     for (std::int64_t piece = first; piece < last; ++piece)
     {
@@ -1128,7 +1133,6 @@ void MultiMaterialCut<Dim>::CommitStep(StepWork& work)
       {
         AdjustIncidence(this->RemainingIncidence, this->Cells.data() + cell * (Dim + 1), 1);
       }
-      AdjustIncidence(this->Incidence, this->Cells.data() + cell * (Dim + 1), 1);
     }
     first = last;
   }
