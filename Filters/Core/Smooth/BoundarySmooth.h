@@ -1935,11 +1935,26 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
       finalTargets, composedTargets, &executor };
     executor.For(0, static_cast<std::int64_t>(colour.size()), 1, move);
   }
-  // Back to "the target of a point outside a step is its position" for the next step.
-  for (const std::int64_t p : all)
+  // Back to "the target of a point outside a step is its position" for the next step (in
+  // parallel: the points of a step are scattered, and this loop was most of a step's serial
+  // time).
+  struct ResetKernel
   {
-    std::copy(this->Points + p * Dim, this->Points + (p + 1) * Dim, this->Targets.data() + p * Dim);
-  }
+    using Scratch = NoScratch;
+    BoundarySmoother* Self;
+    const std::vector<std::int64_t>* All;
+    void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+    {
+      for (std::int64_t i = begin; i < end; ++i)
+      {
+        const std::int64_t p = (*this->All)[i];
+        std::copy(this->Self->Points + p * Dim, this->Self->Points + (p + 1) * Dim,
+          this->Self->Targets.data() + p * Dim);
+      }
+    }
+  };
+  ResetKernel reset{ this, &all };
+  executor.For(0, static_cast<std::int64_t>(all.size()), 1 << 14, reset);
   return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
 }
 
@@ -2327,20 +2342,78 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
   };
 
   std::vector<std::int32_t> colours(static_cast<std::size_t>(this->NumberOfPoints), -1);
+  std::vector<std::int64_t> badCells, candidates;
+  bool scanned = false;
   const int phases = options.ImprovementMovesInterfaces ? 2 : 1;
   // Phase 0 keeps the volumes; phase 1 (ImprovementMovesInterfaces) frees interface points.
   for (int phase = 0; phase < phases; ++phase)
   {
     for (int sweep = 0; sweep < options.NumberOfImprovementSweeps; ++sweep)
     {
-      // The movable points of the cells outside the bounds, coloured greedily in point order.
-      std::vector<std::int64_t> candidates;
-      for (std::int64_t c = 0; c < this->NumberOfCells; ++c)
+      // The cells outside the bounds: every cell is scanned (in parallel, each range into its
+      // own list) before the first sweep; after a sweep only the cells outside the bounds before
+      // it and the cells around its candidates can be, since a move changes only the cells
+      // around the moved point (AAL, 116 labels: 16 scans of 7.7 million cells took 0.3 s, most
+      // of the improvement, for at most 1,500 candidates).
+      if (!scanned)
       {
-        if (!isBad(this->Shapes[c]))
+        constexpr std::int64_t Ranges = 64;
+        const std::int64_t rangeCells = (this->NumberOfCells + Ranges - 1) / Ranges;
+        std::vector<std::vector<std::int64_t>> rangeBad(static_cast<std::size_t>(Ranges));
+        struct ScanKernel
         {
-          continue;
+          using Scratch = NoScratch;
+          const BoundarySmoother* Self;
+          const decltype(isBad)* IsBad;
+          std::int64_t RangeCells;
+          std::vector<std::int64_t>* Lists;
+          void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
+          {
+            for (std::int64_t r = begin; r < end; ++r)
+            {
+              const std::int64_t last =
+                std::min(this->Self->NumberOfCells, (r + 1) * this->RangeCells);
+              for (std::int64_t c = r * this->RangeCells; c < last; ++c)
+              {
+                if ((*this->IsBad)(this->Self->Shapes[c]))
+                {
+                  this->Lists[r].push_back(c);
+                }
+              }
+            }
+          }
+        };
+        ScanKernel scan{ this, &isBad, rangeCells, rangeBad.data() };
+        executor.For(0, Ranges, 1, scan);
+        if (executor.ShouldAbort())
+        {
+          return Status::Aborted();
         }
+        for (const std::vector<std::int64_t>& list : rangeBad)
+        {
+          badCells.insert(badCells.end(), list.begin(), list.end());
+        }
+        scanned = true;
+      }
+      else
+      {
+        for (const std::int64_t p : candidates)
+        {
+          for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
+          {
+            badCells.push_back(static_cast<std::int64_t>(this->Incidence.Cells[k]));
+          }
+        }
+        std::sort(badCells.begin(), badCells.end());
+        badCells.erase(std::unique(badCells.begin(), badCells.end()), badCells.end());
+        badCells.erase(std::remove_if(badCells.begin(), badCells.end(),
+                         [&](std::int64_t c) { return !isBad(this->Shapes[c]); }),
+          badCells.end());
+      }
+      // Their movable points, coloured greedily in point order.
+      candidates.clear();
+      for (const std::int64_t c : badCells)
+      {
         const IdType* ids = connectivity + c * Corners;
         for (int v = 0; v <= Dim; ++v)
         {
