@@ -11,11 +11,57 @@
 #include "Spacetree.h"
 
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
 namespace stm
 {
+
+namespace detail
+{
+/// Whether any of `count` bytes is non-zero, eight at a time.
+inline bool AnyNonZeroByte(const std::uint8_t* bytes, std::int64_t count)
+{
+  std::uint64_t any = 0;
+  std::int64_t i = 0;
+  for (; i + 8 <= count; i += 8)
+  {
+    std::uint64_t word;
+    std::memcpy(&word, bytes + i, 8);
+    any |= word;
+  }
+  for (; i < count; ++i)
+  {
+    any |= bytes[i];
+  }
+  return any != 0;
+}
+
+/// Whether any of `count` bytes, each 0 or 1, is 0, eight at a time.
+inline bool AnyZeroFlag(const std::uint8_t* flags, std::int64_t count)
+{
+  constexpr std::uint64_t AllOnes = 0x0101010101010101ULL;
+  std::int64_t i = 0;
+  for (; i + 8 <= count; i += 8)
+  {
+    std::uint64_t word;
+    std::memcpy(&word, flags + i, 8);
+    if (word != AllOnes)
+    {
+      return true;
+    }
+  }
+  for (; i < count; ++i)
+  {
+    if (flags[i] == 0)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+} // namespace detail
 
 template <int Dim>
 Status ValidateSpacetree(const Spacetree<Dim>& tree)
@@ -141,22 +187,19 @@ Status ValidateSpacetree(const Spacetree<Dim>& tree)
         cell[axis] += rest % size[axis];
         rest /= size[axis];
       }
+      // A row of the lattice at a time, eight cells per test (AAL, 116 labels: the loop per
+      // cell took 0.14 s of each stage that reads a tree, balance and tessellation).
       std::uint8_t* row = coverage.data() + LinearIndex<Dim>(cell, dims);
-      for (std::int64_t i = 0; i < size[0]; ++i)
+      if (detail::AnyNonZeroByte(row, size[0]))
       {
-        if (row[i]++ != 0)
-        {
-          return Status::Invalid("leaf " + std::to_string(leaf) + " overlaps another leaf");
-        }
+        return Status::Invalid("leaf " + std::to_string(leaf) + " overlaps another leaf");
       }
+      std::memset(row, 1, static_cast<std::size_t>(size[0]));
     }
   }
-  for (std::int64_t c = 0; c < cells; ++c)
+  if (detail::AnyZeroFlag(coverage.data(), cells))
   {
-    if (coverage[c] == 0)
-    {
-      return Status::Invalid("the leaves leave a hole in the root grid");
-    }
+    return Status::Invalid("the leaves leave a hole in the root grid");
   }
   return Status::Ok();
 }
