@@ -18,11 +18,15 @@
 
 #include "vtkAOSDataArrayTemplate.h"
 #include "vtkAlgorithm.h"
+#include "vtkArrayDispatch.h"
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkCellType.h"
 #include "vtkDataArray.h"
+#include "vtkDataArrayRange.h"
 #include "vtkDataObject.h"
+#include "vtkDataSetAttributes.h"
+#include "vtkIdList.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
 #include "vtkNew.h"
@@ -423,6 +427,68 @@ inline vtkDataArray* FindSeparatingFunction(vtkDataArray* selected, int associat
   }
   return function;
 }
+/// Copies tuple ids[i] of each array to tuple start + i of its copy, on all threads.
+template <class Id>
+struct GatherWorker
+{
+  const Id* Ids;
+  vtkIdType Count;
+  vtkIdType Start;
+  template <class SourceArray, class TargetArray>
+  void operator()(SourceArray* source, TargetArray* target) const
+  {
+    const auto in = vtk::DataArrayTupleRange(source);
+    auto out = vtk::DataArrayTupleRange(target);
+    vtkSMPTools::For(0, this->Count,
+      [&](vtkIdType begin, vtkIdType end)
+      {
+        for (vtkIdType i = begin; i < end; ++i)
+        {
+          out[this->Start + i] = in[static_cast<vtkIdType>(this->Ids[i])];
+        }
+      });
+  }
+};
+
+/// What out->CopyData(in, ids, start) gives (out made from `in` by CopyAllocate or
+/// InterpolateAllocate; tuple ids[i] to tuple start + i, the arrays ending at start + count),
+/// each array gathered on all threads: VTK 9.2 copies a tuple at a time through the generic
+/// array interface (the 116 labels' cell materials, 7.7 million: 0.09 s on one thread). When an
+/// array of `out` has no data array of its name, type and components in `in`, CopyData does it.
+template <class Id>
+void GatherTuples(vtkDataSetAttributes* in, vtkDataSetAttributes* out, const Id* ids,
+  vtkIdType count, vtkIdType start)
+{
+  std::vector<std::pair<vtkDataArray*, vtkDataArray*>> pairs;
+  bool paired = true;
+  for (int i = 0; i < out->GetNumberOfArrays() && paired; ++i)
+  {
+    vtkDataArray* target = out->GetArray(i);
+    const char* name = target ? target->GetName() : nullptr;
+    vtkDataArray* source = name ? in->GetArray(name) : nullptr;
+    paired = source && source->GetDataType() == target->GetDataType() &&
+      source->GetNumberOfComponents() == target->GetNumberOfComponents();
+    pairs.emplace_back(source, target);
+  }
+  if (!paired || pairs.size() != static_cast<std::size_t>(out->GetNumberOfArrays()))
+  {
+    vtkNew<vtkIdList> list;
+    list->SetNumberOfIds(count);
+    std::copy(ids, ids + count, list->GetPointer(0));
+    out->CopyData(in, list, start);
+    return;
+  }
+  const GatherWorker<Id> worker{ ids, count, start };
+  for (const auto& pair : pairs)
+  {
+    pair.second->SetNumberOfTuples(start + count);
+    if (!vtkArrayDispatch::Dispatch2SameValueType::Execute(pair.first, pair.second, worker))
+    {
+      worker(pair.first, pair.second);
+    }
+  }
+}
+
 } // namespace stmCutInput
 
 #endif

@@ -131,10 +131,7 @@ void AssemblePoints(vtkPointSet* input, const std::vector<stm::CutEdge>& edges,
   vtkPointData* inPD = input->GetPointData();
   vtkPointData* outPD = output->GetPointData();
   outPD->InterpolateAllocate(inPD, total);
-  vtkNew<vtkIdList> keptIds;
-  keptIds->SetNumberOfIds(kept);
-  std::copy(selection.InputPoints.begin(), selection.InputPoints.end(), keptIds->GetPointer(0));
-  outPD->CopyData(inPD, keptIds, vtkIdType{ 0 });
+  stmCutInput::GatherTuples(inPD, outPD, selection.InputPoints.data(), kept, 0);
   for (vtkIdType p = kept; p < total; ++p)
   {
     const stm::CutEdge& edge = edges[selection.CutEdges[p - kept]];
@@ -242,13 +239,8 @@ stm::Status CutVolume(CutRequest& request, stm::MarchingSimplices<Dim>& cutter,
   vtkCellData* inCD = input->GetCellData();
   vtkCellData* outCD = output->GetCellData();
   outCD->CopyAllocate(inCD, cells);
-  {
-    vtkNew<vtkIdList> parentIds;
-    parentIds->SetNumberOfIds(cells);
-    std::copy(parents.begin(), parents.end(), parentIds->GetPointer(0));
-    std::vector<std::int64_t>().swap(parents);
-    outCD->CopyData(inCD, parentIds, vtkIdType{ 0 });
-  }
+  stmCutInput::GatherTuples(inCD, outCD, parents.data(), cells, 0);
+  std::vector<std::int64_t>().swap(parents);
   if (vtkAbstractArray* original = outCD->GetAbstractArray("Material"))
   {
     original->SetName("OriginalMaterial");

@@ -199,10 +199,9 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
   vtkPointData* inPD = input->GetPointData();
   vtkPointData* outPD = output->GetPointData();
   outPD->InterpolateAllocate(inPD, total);
-  for (vtkIdType p = 0; p < numberOfPoints; ++p)
-  {
-    outPD->CopyData(inPD, p, p);
-  }
+  // The input points' data as one range per array (a call per point took 0.1 s of the 116
+  // labels' cut for one array).
+  outPD->CopyData(inPD, vtkIdType{ 0 }, numberOfPoints, vtkIdType{ 0 });
   for (vtkIdType p = numberOfPoints; p < total; ++p)
   {
     const stm::CutEdge& edge = added[p - numberOfPoints];
@@ -213,12 +212,7 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
   vtkCellData* inCD = input->GetCellData();
   vtkCellData* outCD = output->GetCellData();
   outCD->CopyAllocate(inCD, cells);
-  {
-    vtkNew<vtkIdList> parentIds;
-    parentIds->SetNumberOfIds(cells);
-    std::copy(cut.GetCellParents().begin(), cut.GetCellParents().end(), parentIds->GetPointer(0));
-    outCD->CopyData(inCD, parentIds);
-  }
+  stmCutInput::GatherTuples(inCD, outCD, cut.GetCellParents().data(), cells, 0);
   if (vtkAbstractArray* original = outCD->GetAbstractArray("Material"))
   {
     original->SetName("OriginalMaterial");

@@ -396,6 +396,13 @@ TEST(MarchingSimplicesFilter, DefaultChainKeepsCornerBlocksSpecksAndThinPlates)
   }
 }
 
+// Each piece carries its parent cell's data and the input points keep theirs, whether the
+// arrays are gathered on the threads (numbers) or by VTK (a string array among them).
+TEST(MarchingSimplicesFilter, CellAndPointDataComeFromTheParents)
+{
+  stmTest::ExpectParentArraysThrough<stmMarchingSimplices>(stmTest::BadInputTree(0), 0.0);
+}
+
 TEST(MarchingSimplicesFilter, BadInputGetsClearErrors)
 {
   const auto check = stmTest::ExpectErrorAndEmptyOutput;

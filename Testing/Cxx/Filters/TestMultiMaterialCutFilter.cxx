@@ -366,6 +366,14 @@ TEST(MultiMaterialCutFilter, AalAtlasSmoothedMeetsTheQualityGoals)
             << " degrees\n";
 }
 
+// Each piece carries its parent cell's data and lies at its parent (within half the parent's
+// size: snapping moves points by less than an edge), and the input points keep theirs (moved or
+// not, they keep their ids), whether the arrays are gathered on the threads or by VTK.
+TEST(MultiMaterialCutFilter, CellAndPointDataComeFromTheParents)
+{
+  stmTest::ExpectParentArraysThrough<stmMultiMaterialCut>(stmTest::BadInputTree(2), 0.5);
+}
+
 TEST(MultiMaterialCutFilter, BadInputGetsClearErrors)
 {
   const auto check = stmTest::ExpectErrorAndEmptyOutput;

@@ -22,15 +22,19 @@
 #include "vtkCommand.h"
 #include "vtkDataArray.h"
 #include "vtkDataSet.h"
+#include "vtkDoubleArray.h"
+#include "vtkFloatArray.h"
 #include "vtkIdList.h"
 #include "vtkImageData.h"
 #include "vtkImageThreshold.h"
+#include "vtkIntArray.h"
 #include "vtkNIFTIImageReader.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
 #include "vtkPoints.h"
 #include "vtkSmartPointer.h"
 #include "vtkSphere.h"
+#include "vtkStringArray.h"
 #include "vtkUnsignedShortArray.h"
 #include "vtkUnstructuredGrid.h"
 
@@ -343,6 +347,124 @@ stm::MeshInvariantReport CheckMesh(vtkUnstructuredGrid* mesh, const int axes[Dim
     return stm::CheckSimplicialMesh<Dim>(points, cells, &materials, tolerance);
   }
   return stm::CheckCellMesh<Dim>(points, cells, shapes, &materials, tolerance);
+}
+
+/// Arrays that say where a cut's cells and points come from: ParentCell (the cell's id, a
+/// double), CellTriple (c, 2c, -c as floats) and, with `withStrings`, CellName (the id as a
+/// string, which the filters' typed copy does not take: VTK's copy then does it all); PointPair
+/// (p, 3p as ints) per point.
+inline void AddParentArrays(vtkUnstructuredGrid* mesh, bool withStrings)
+{
+  vtkNew<vtkDoubleArray> parent;
+  parent->SetName("ParentCell");
+  vtkNew<vtkFloatArray> triple;
+  triple->SetName("CellTriple");
+  triple->SetNumberOfComponents(3);
+  vtkNew<vtkStringArray> names;
+  names->SetName("CellName");
+  for (vtkIdType c = 0; c < mesh->GetNumberOfCells(); ++c)
+  {
+    parent->InsertNextValue(static_cast<double>(c));
+    triple->InsertNextTuple3(c, 2.0 * c, -1.0 * c);
+    names->InsertNextValue(std::to_string(c));
+  }
+  mesh->GetCellData()->AddArray(parent);
+  mesh->GetCellData()->AddArray(triple);
+  if (withStrings)
+  {
+    mesh->GetCellData()->AddArray(names);
+  }
+  vtkNew<vtkIntArray> pair;
+  pair->SetName("PointPair");
+  pair->SetNumberOfComponents(2);
+  for (vtkIdType p = 0; p < mesh->GetNumberOfPoints(); ++p)
+  {
+    pair->InsertNextTuple2(static_cast<double>(p), 3.0 * p);
+  }
+  mesh->GetPointData()->AddArray(pair);
+}
+
+/// Every cell of `cut` carries its parent's arrays (AddParentArrays on `input`) and its centroid
+/// lies in its parent's bounds, grown on every side by `growth` times their largest side
+/// (where snapping moved points); the first `inputPoints` points carry their own.
+inline void ExpectParentArrays(vtkUnstructuredGrid* input, vtkUnstructuredGrid* cut,
+  bool withStrings, double growth, vtkIdType inputPoints)
+{
+  vtkDataArray* parent = cut->GetCellData()->GetArray("ParentCell");
+  vtkDataArray* triple = cut->GetCellData()->GetArray("CellTriple");
+  auto* names = vtkStringArray::SafeDownCast(cut->GetCellData()->GetAbstractArray("CellName"));
+  ASSERT_NE(parent, nullptr);
+  ASSERT_NE(triple, nullptr);
+  ASSERT_EQ(parent->GetNumberOfTuples(), cut->GetNumberOfCells());
+  ASSERT_EQ(triple->GetNumberOfTuples(), cut->GetNumberOfCells());
+  ASSERT_EQ(names != nullptr, withStrings);
+  vtkIdType misplaced = 0;
+  for (vtkIdType c = 0; c < cut->GetNumberOfCells(); ++c)
+  {
+    const double id = parent->GetComponent(c, 0);
+    ASSERT_TRUE(id >= 0 && id < input->GetNumberOfCells() && id == std::floor(id)) << c;
+    EXPECT_EQ(triple->GetComponent(c, 0), id) << c;
+    EXPECT_EQ(triple->GetComponent(c, 1), 2.0 * id) << c;
+    EXPECT_EQ(triple->GetComponent(c, 2), -id) << c;
+    if (names)
+    {
+      EXPECT_EQ(names->GetValue(c), std::to_string(static_cast<long long>(id))) << c;
+    }
+    {
+      double bounds[6], centroid[3] = { 0, 0, 0 }, x[3];
+      input->GetCellBounds(static_cast<vtkIdType>(id), bounds);
+      const double side =
+        std::max({ bounds[1] - bounds[0], bounds[3] - bounds[2], bounds[5] - bounds[4] });
+      const double margin = 1e-9 + growth * side;
+      vtkIdList* ids = cut->GetCell(c)->GetPointIds();
+      for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k)
+      {
+        cut->GetPoint(ids->GetId(k), x);
+        for (int a = 0; a < 3; ++a)
+        {
+          centroid[a] += x[a] / ids->GetNumberOfIds();
+        }
+      }
+      for (int a = 0; a < 3; ++a)
+      {
+        misplaced +=
+          centroid[a] < bounds[2 * a] - margin || centroid[a] > bounds[2 * a + 1] + margin;
+      }
+    }
+  }
+  EXPECT_EQ(misplaced, 0);
+  vtkDataArray* pair = cut->GetPointData()->GetArray("PointPair");
+  ASSERT_NE(pair, nullptr);
+  ASSERT_EQ(pair->GetNumberOfTuples(), cut->GetNumberOfPoints());
+  for (vtkIdType p = 0; p < inputPoints; ++p)
+  {
+    EXPECT_EQ(pair->GetComponent(p, 0), static_cast<double>(p)) << p;
+    EXPECT_EQ(pair->GetComponent(p, 1), 3.0 * p) << p;
+  }
+}
+
+/// Cuts the tessellation of `tree` with AddParentArrays' arrays by a new Cut filter, without and
+/// with the string array, and checks ExpectParentArrays.
+template <class Cut>
+void ExpectParentArraysThrough(vtkAlgorithm* tree, double growth)
+{
+  vtkNew<stmSpacetreeTessellate> tessellate;
+  tessellate->SetInputConnection(tree->GetOutputPort());
+  tessellate->Update();
+  for (const bool withStrings : { false, true })
+  {
+    vtkNew<vtkUnstructuredGrid> mesh;
+    mesh->ShallowCopy(tessellate->GetOutput());
+    AddParentArrays(mesh, withStrings);
+    vtkNew<Cut> cut;
+    cut->SetInputData(mesh);
+    cut->Update();
+    auto* output = vtkUnstructuredGrid::SafeDownCast(cut->GetOutputDataObject(0));
+    ASSERT_NE(output, nullptr);
+    ASSERT_GT(cut->GetNumberOfSplitCells(), 0);
+    ASSERT_GT(output->GetNumberOfCells(), mesh->GetNumberOfCells());
+    ExpectParentArrays(mesh, output, withStrings, growth, mesh->GetNumberOfPoints());
+  }
 }
 
 } // namespace stmTest
