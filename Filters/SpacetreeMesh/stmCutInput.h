@@ -470,7 +470,7 @@ void GatherTuples(vtkDataSetAttributes* in, vtkDataSetAttributes* out, const Id*
       source->GetNumberOfComponents() == target->GetNumberOfComponents();
     pairs.emplace_back(source, target);
   }
-  if (!paired || pairs.size() != static_cast<std::size_t>(out->GetNumberOfArrays()))
+  if (!paired)
   {
     vtkNew<vtkIdList> list;
     list->SetNumberOfIds(count);
