@@ -135,7 +135,7 @@ vtkSmartPointer<vtkAbstractArray> ExtendedCopy(vtkAbstractArray* source, vtkIdTy
 /// read from the extended arrays, which hold every new point before the next one.
 template <int Dim, class IdType>
 stm::Status SplitEdges(SmoothRequest& request, const IdType* connectivity,
-  const std::vector<double>& local, stmSMPExecutor& executor)
+  const std::vector<double>& local, const std::uint8_t* heldPoints, stmSMPExecutor& executor)
 {
   // A 64-bit copy: InteriorEdgeSplit keeps 64-bit materials, and the smoother's records, the
   // peak of the stage, are freed by now.
@@ -146,6 +146,7 @@ stm::Status SplitEdges(SmoothRequest& request, const IdType* connectivity,
   stm::InteriorEdgeSplitOptions options;
   options.MaxConditionNumber = request.Options.MaxConditionNumber;
   options.MinDihedralAngle = request.Options.MinDihedralAngle;
+  options.HeldPoints = heldPoints;
   stm::InteriorEdgeSplit<Dim> split;
   const stm::Status status = split.Split(local.data(), points, connectivity, cells,
     materials.empty() ? nullptr : materials.data(), options, executor);
@@ -392,13 +393,14 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
     });
   output->SetPoints(moved);
   output->GetPointData()->AddArray(displacement);
-  // Not in a piece: whether an edge on its boundary is split depends on both sides' moves.
-  if (!request.Filter->GetSplitInteriorEdges() || !held.empty() ||
-    request.Filter->GetAbortExecute())
+  // In a piece only edges between own points (not held): whether an edge with a shared end is
+  // split would depend on both sides' moves.
+  if (!request.Filter->GetSplitInteriorEdges() || request.Filter->GetAbortExecute())
   {
     return stm::Status::Ok();
   }
-  return SplitEdges<Dim>(request, connectivity, local, executor);
+  return SplitEdges<Dim>(
+    request, connectivity, local, held.empty() ? nullptr : held.data(), executor);
 }
 } // namespace
 

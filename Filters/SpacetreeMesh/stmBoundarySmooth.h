@@ -40,8 +40,9 @@
  * decisions).
  *
  * A piece of a larger mesh (stmImageToSpacetree::SplitIntoPieces), whose ghost cells carry
- * vtkGhostType: the points of the ghost cells are held where they are and no edge is split, so
- * that adjacent pieces keep the points they share. The own points' moves then read only the
+ * vtkGhostType: the points of the ghost cells are held where they are and no edge with a held
+ * end is split, so that adjacent pieces keep the points and facets they share. The own points'
+ * moves then read only the
  * ghost cells that share a point with the own cells (the interior layers stop at held points),
  * the one ring that the cuts keep by default.
  *

@@ -47,6 +47,11 @@ struct InteriorEdgeSplitOptions
   /// The bounds that make a cell a candidate, >= 1 and in [0, 180).
   double MaxConditionNumber = 3.5;
   double MinDihedralAngle = 15.0;
+  /// Per input point, non-zero for a point that no split may touch (nullptr: none): an edge with
+  /// a held end is not split. A piece of a larger mesh holds the points of its ghost cells; an
+  /// edge between two other points has only the piece's own cells around it, and splitting it
+  /// changes no facet that the piece shares with another.
+  const std::uint8_t* HeldPoints = nullptr;
 };
 
 template <int Dim>
@@ -89,6 +94,11 @@ private:
     return id < this->NumberOfInputPoints
       ? this->InputPoints + id * Dim
       : this->NewPoints[static_cast<std::size_t>(id - this->NumberOfInputPoints)].Position.data();
+  }
+  bool IsHeld(std::int64_t point) const
+  {
+    return this->Options.HeldPoints && point < this->NumberOfInputPoints &&
+      this->Options.HeldPoints[point] != 0;
   }
   CellIds Cell(std::int64_t cell) const
   {
@@ -317,6 +327,10 @@ Status InteriorEdgeSplit<Dim>::Split(const double* points, std::int64_t numberOf
     {
       for (int j = i + 1; j <= Dim; ++j)
       {
+        if (this->IsHeld(ids[i]) || this->IsHeld(ids[j]))
+        {
+          continue;
+        }
         const std::vector<std::int64_t> ring = this->InteriorRing(ids[i], ids[j]);
         if (ring.empty())
         {

@@ -2,8 +2,8 @@
 // Splitting edges inside one material (InteriorEdgeSplit) in 2D and 3D: the star of a long
 // interior edge (two flat triangles; six needle tetrahedra around a hexagon) is split at its
 // midpoint, which the symmetric search keeps, into a conforming mesh of less bad cells with the
-// same volume per material; an edge between two materials or on the outer boundary is never
-// split, and bad options are refused.
+// same volume per material; an edge between two materials, on the outer boundary or with a held
+// end is never split, and bad options are refused.
 
 #include "CoreTestUtilities.h"
 
@@ -14,7 +14,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 namespace
@@ -181,6 +183,36 @@ TYPED_TEST(InteriorEdgeSplitTest, EdgesOnInterfacesOrTheBoundaryStay)
   ASSERT_TRUE(RunSplit<D>(Star<D>(), options, split).IsOk());
   EXPECT_EQ(split.GetNumberOfCandidates(), 0);
   EXPECT_TRUE(split.GetNewPoints().empty());
+}
+
+// In a piece of a larger mesh the points of its ghost cells are held: an edge with a held end
+// is never split, and holding a point off the edge leaves the split as it was.
+TYPED_TEST(InteriorEdgeSplitTest, EdgesWithAHeldEndStay)
+{
+  constexpr int D = TypeParam::value;
+  const StarMesh<D> mesh = Star<D>();
+  stm::InteriorEdgeSplitOptions options;
+  options.MaxConditionNumber = 2.0;
+  std::vector<std::uint8_t> held(mesh.Points.size() / D, 0);
+  options.HeldPoints = held.data();
+  for (const int end : { 0, 1 })
+  {
+    std::fill(held.begin(), held.end(), 0);
+    held[end] = 1;
+    stm::InteriorEdgeSplit<D> split;
+    ASSERT_TRUE(RunSplit<D>(mesh, options, split).IsOk());
+    EXPECT_GT(split.GetNumberOfCandidates(), 0);
+    EXPECT_TRUE(split.GetNewPoints().empty()) << "end " << end;
+    EXPECT_TRUE(split.GetChangedCells().empty());
+    EXPECT_TRUE(split.GetAppendedCells().empty());
+  }
+  std::fill(held.begin(), held.end(), 0);
+  held[2] = 1; // a corner of the star off the edge
+  stm::InteriorEdgeSplit<D> split;
+  ASSERT_TRUE(RunSplit<D>(mesh, options, split).IsOk());
+  ASSERT_EQ(split.GetNewPoints().size(), 1u);
+  EXPECT_EQ(split.GetNewPoints()[0].A + split.GetNewPoints()[0].B, 1); // the edge (0, 1)
+  EXPECT_EQ(split.GetAppendedCells().size(), mesh.Materials.size());
 }
 
 TEST(InteriorEdgeSplit, RejectsBadOptionsAndIds)

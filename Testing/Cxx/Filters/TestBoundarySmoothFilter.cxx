@@ -28,6 +28,7 @@
 #include "vtkPointData.h"
 #include "vtkPoints.h"
 #include "vtkSphere.h"
+#include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 
 #include <gtest/gtest.h>
@@ -236,7 +237,8 @@ std::array<double, 3> SplitOnly(
 // 2, no smoothing or improvement). The edge is split at its midpoint: one point appended with
 // its point data interpolated (a "Tag" of 10 and 20 at the ends gives 15) and a zero
 // SmoothingDisplacement, six cells appended with their parents' cell data, a valid mesh with
-// the same volume and a worst condition number of 1.86. With the option off nothing changes.
+// the same volume and a worst condition number of 1.86. With the option off nothing changes, and
+// neither does it when a ghost cell (a piece's) holds the edge's ends.
 TEST(BoundarySmoothFilter, SplitInteriorEdgesOfNeedles)
 {
   vtkNew<vtkUnstructuredGrid> star;
@@ -304,6 +306,20 @@ TEST(BoundarySmoothFilter, SplitInteriorEdgesOfNeedles)
   EXPECT_NEAR(stmTest::MeasureVerdictQuality(output).WorstCondition, 1.86476, 1e-5);
 
   smooth->SplitInteriorEdgesOff();
+  smooth->Update();
+  EXPECT_EQ(smooth->GetNumberOfSplitEdges(), 0);
+  EXPECT_EQ(smooth->GetOutput()->GetNumberOfPoints(), 8);
+  EXPECT_EQ(smooth->GetOutput()->GetNumberOfCells(), 6);
+
+  // In a piece the points of its ghost cells are held, and an edge with a held end is not
+  // split: here one ghost cell holds both ends of the star's edge.
+  vtkNew<vtkUnsignedCharArray> ghosts;
+  ghosts->SetName(vtkDataSetAttributes::GhostArrayName());
+  ghosts->SetNumberOfValues(6);
+  ghosts->FillValue(0);
+  ghosts->SetValue(3, vtkDataSetAttributes::DUPLICATECELL);
+  star->GetCellData()->AddArray(ghosts);
+  smooth->SplitInteriorEdgesOn();
   smooth->Update();
   EXPECT_EQ(smooth->GetNumberOfSplitEdges(), 0);
   EXPECT_EQ(smooth->GetOutput()->GetNumberOfPoints(), 8);
