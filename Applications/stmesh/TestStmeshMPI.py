@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """stmesh under MPI (issue 11); one ctest per case (stmesh.mpi.<case>).
 
-Usage: TestStmeshMPI.py --stmesh EXE --mpiexec EXE --work DIR CASE
+Usage: TestStmeshMPI.py --stmesh EXE --mpiexec EXE --work DIR [--aal FILE] CASE
 
 The cases run `mpiexec -n P stmesh` (oversubscribed: 4 ranks on a 2-core machine) on a label
 image made here (two nested ellipsoids and a ball, 56 x 48 x 40 voxels: 36 root cells) and read
@@ -63,6 +63,7 @@ class MPIContext(T.Context):
         self.stmesh = arguments.stmesh
         self.mpiexec = arguments.mpiexec
         self.work = arguments.work
+        self.aal = arguments.aal
         self.image = None
         self.outer_facets = {}  # of the one-rank mesh, per option list
 
@@ -294,6 +295,85 @@ def case_gather(c):
     check(meshes[1][1] == meshes[2][1], "the gathered mesh differs from the one-rank mesh")
 
 
+def tetrahedron_quality(X):
+    """Condition number and smallest dihedral angle (degrees) of the tetrahedra X (n x 4 x 3),
+    with numpy."""
+    import numpy as np
+    e = [X[:, 1] - X[:, 0], X[:, 2] - X[:, 0], X[:, 3] - X[:, 0],
+         X[:, 2] - X[:, 1], X[:, 3] - X[:, 1], X[:, 3] - X[:, 2]]
+    n = [np.cross(e[4], e[3]), np.cross(e[1], e[2]), np.cross(e[2], e[0]), np.cross(e[0], e[1])]
+    determinant = np.einsum("ij,ij->i", e[0], n[1])
+    edges = sum(np.einsum("ij,ij->i", a, a) for a in e)
+    squared = [np.einsum("ij,ij->i", a, a) for a in n]
+    largest_cosine = np.full(len(X), -1.0)
+    for i in range(4):
+        for j in range(i + 1, 4):
+            largest_cosine = np.maximum(largest_cosine, -np.einsum("ij,ij->i", n[i], n[j]) /
+                                        np.sqrt(squared[i] * squared[j]))
+    condition = np.sqrt(edges * sum(squared)) / (6 * determinant)
+    return determinant, condition, np.degrees(np.arccos(np.clip(largest_cosine, -1, 1)))
+
+
+def merged_pieces(path):
+    """The pieces of a .pvtu merged by their global point ids, with numpy: (positions, cells);
+    checks that the pieces' shared points agree bit for bit."""
+    import numpy as np
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    grids = read_pieces(path)
+    positions = np.full((sum(g.GetNumberOfPoints() for g in grids), 3), np.nan)
+    cells = []
+    for grid in grids:
+        ids = vtk_to_numpy(grid.GetPointData().GetArray("GlobalPointIds")).astype(np.int64)
+        points = vtk_to_numpy(grid.GetPoints().GetData()).astype(np.float64)
+        known = ~np.isnan(positions[ids, 0])
+        check(np.array_equal(positions[ids[known]], points[known]),
+              "the pieces' shared points differ")
+        positions[ids] = points
+        connectivity = vtk_to_numpy(grid.GetCells().GetConnectivityArray()).reshape(-1, 4)
+        cells.append(ids[connectivity])
+    return positions, np.concatenate(cells)
+
+
+def facets_of_one_cell(cells):
+    """The number of facets in one cell; checks that none is in more than two."""
+    import numpy as np
+    facets = np.sort(np.concatenate([cells[:, [1, 2, 3]], cells[:, [0, 2, 3]],
+                                     cells[:, [0, 1, 3]], cells[:, [0, 1, 2]]]), axis=1)
+    check(facets.max() < 1 << 21, "too many points for the facet keys")
+    keys = (facets[:, 0] << 42) | (facets[:, 1] << 21) | facets[:, 2]  # one integer per facet
+    _, uses = np.unique(keys, return_counts=True)
+    check(uses.max() <= 2, "a facet of more than two cells")
+    return int((uses == 1).sum())
+
+
+def case_border_quality(c):
+    # The AAL atlas with all 116 labels on 2 ranks. Each piece smooths holding the points the
+    # pieces share; the ranks then improve the cells at those points in turns
+    # (stmPieceBorder.h). Before, two cells next to them stayed at condition number 4.54 and
+    # 9.1 degrees; now the pieces reach the smoother's bounds, 3.5 and 15 degrees, as one rank
+    # does. Recomputed from the pieces, merged by their global ids: the shared points agree bit
+    # for bit, and the union has the one-rank mesh's outer facets (a crack adds its two sides).
+    arguments = [c.aal, "--labels", "all", "--materials", "separate"]
+    outer = {}
+    for ranks in (1, 2):
+        output, summary = c.path("aal%d.pvtu" % ranks), c.path("aal%d.json" % ranks)
+        c.run_ranks(ranks, arguments + ["-o", output, "--summary", summary],
+                    launcher_options=("--bind-to", "none"))
+        positions, cells = merged_pieces(output)
+        determinant, condition, angle = tetrahedron_quality(positions[cells])
+        check((determinant > 0).all(), "%d ranks: inverted cells" % ranks)
+        check(condition.max() <= 3.5 + 1e-6 and angle.min() >= 15.0 - 1e-6,
+              "%d ranks: worst condition number %.4f, smallest dihedral angle %.3f degrees" %
+              (ranks, condition.max(), angle.min()))
+        with open(summary) as report:
+            quality = json.load(report)["quality"]
+        check(quality["worst_condition"] <= 3.5 + 1e-6 and
+              quality["smallest_dihedral_degrees"] >= 15.0 - 1e-6,
+              "%d ranks: the summary's quality: %s" % (ranks, quality["worst_condition"]))
+        outer[ranks] = facets_of_one_cell(cells)
+    check(outer[2] == outer[1], "2 ranks: %d outer facets, 1 rank %d" % (outer[2], outer[1]))
+
+
 def case_errors(c):
     # Options that need the whole image on one rank are refused by rank 0 alone, with exit
     # code 2 on every rank.
@@ -341,6 +421,7 @@ def main():
     parser.add_argument("--stmesh", required=True)
     parser.add_argument("--mpiexec", required=True)
     parser.add_argument("--work", required=True)
+    parser.add_argument("--aal", help="the AAL atlas (case border_quality)")
     parser.add_argument("case")
     arguments = parser.parse_args()
     return T.run_case(arguments.case, arguments.work, lambda: MPIContext(arguments),

@@ -3978,9 +3978,12 @@ vtkSmartPointer<vtkPointSet> RunCut(
 /// the side --keep asks for or the surface, by stmMarchingSimplices on the smoothed mesh. The
 /// cut points and the snapped points carry f = iso exactly, so that run splits nothing: its
 /// surface is the smoothed interface and its sides are the smoothed cut's cells. The sphere is
-/// known exactly, so the smoothed surface points go back onto it.
+/// known exactly, so the smoothed surface points go back onto it. Under MPI, rank k of n asks
+/// for piece k of n: the ranks then improve the cells at the points their pieces share together
+/// (stmBoundarySmooth).
 vtkSmartPointer<vtkPointSet> RunSmooth(vtkSmartPointer<vtkUnstructuredGrid> grid,
-  const Options& options, const SeparatingSource& source, StageReport& report)
+  const Options& options, const SeparatingSource& source, StageReport& report, int piece,
+  int pieces)
 {
   vtkNew<stmBoundarySmooth> smooth;
   smooth->SetNumberOfIterations(options.SmoothIterations);
@@ -3995,7 +3998,7 @@ vtkSmartPointer<vtkPointSet> RunSmooth(vtkSmartPointer<vtkUnstructuredGrid> grid
     smooth->SetProjectToFunction(true);
     smooth->SetImplicitFunction(source.Sphere);
   }
-  grid = RunStage(smooth, grid, "smoothing the surface", report, false);
+  grid = RunStage(smooth, grid, "smoothing the surface", report, false, piece, pieces);
   report.Smooth = true;
   report.MovedPoints = static_cast<long long>(smooth->GetNumberOfMovedPoints());
   report.RejectedMoves = static_cast<long long>(smooth->GetNumberOfRejectedMoves());
@@ -5303,7 +5306,8 @@ int Run(const Options& options, const ParallelRun& parallel)
     {
       vtkSmartPointer<vtkUnstructuredGrid> cutMesh = vtkUnstructuredGrid::SafeDownCast(mesh);
       mesh = nullptr;
-      mesh = RunSmooth(std::move(cutMesh), options, source, smoothReport);
+      mesh = RunSmooth(
+        std::move(cutMesh), options, source, smoothReport, parallel.Rank(), parallel.Ranks());
     }
     summary.Stages.push_back(smoothReport);
   }

@@ -2,6 +2,7 @@
 #include "stmBoundarySmooth.h"
 
 #include "stmCutInput.h"
+#include "stmPieceBorder.h"
 #include "stmPieces.h"
 #include "stmPlaneFrame.h"
 #include "stmSMPExecutor.h"
@@ -56,7 +57,27 @@ struct SmoothRequest
   stmPlaneFrame Coordinates;
   stm::BoundarySmoothStats Stats;
   vtkIdType SplitEdges = 0;
+  // Pieces on the ranks of an MPI run (stmPieceBorder): the controller, whether this rank has
+  // taken its part in the pass over the shared points, and what the pass did.
+  vtkMultiProcessController* Controller = nullptr;
+  bool BorderPassTaken = false;
+  stmPieceBorder::Stats Border;
 };
+
+/// This rank's part in stmPieceBorder's pass when it has no piece to smooth (`ready`: an empty
+/// piece) or its smoothing failed (not `ready`: no rank then changes anything).
+void TakePartWithNothing(SmoothRequest& request, bool ready)
+{
+  if (!request.Controller || request.BorderPassTaken)
+  {
+    return;
+  }
+  request.BorderPassTaken = true;
+  stmSMPExecutor executor(request.Filter);
+  stmPieceBorder::ImproveSharedPoints(
+    request.Controller, ready, stmPieceBorder::Piece<3, vtkIdType>(), [](std::int64_t, double*) {},
+    request.Options, stm::NoProjection(), executor, request.Border);
+}
 
 /// The cells with the edits of InteriorEdgeSplit, stored as Storage (32- or 64-bit ids).
 template <class Storage, int Dim, class IdType>
@@ -338,6 +359,7 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
 
   stmSMPExecutor executor(request.Filter);
   executor.SetProgressRange(0.05, 0.95);
+  std::vector<std::uint8_t> roles; // the smoother's, for stmPieceBorder
   {
     // Scoped: the smoother's incidence and cell records (AAL, 116 labels: 430 MB) are freed
     // before the output's arrays are made.
@@ -355,6 +377,32 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
       return status;
     }
     request.Stats = smoother.GetStats();
+    if (request.Controller)
+    {
+      roles = smoother.GetPointRoles();
+    }
+  }
+  if (request.Controller)
+  {
+    // The points the pieces share, and the cells at them (stmPieceBorder), now that every
+    // piece has smoothed its own points.
+    request.BorderPassTaken = true;
+    const std::vector<std::int64_t> materials = stmCutInput::CellMaterials(input);
+    const stmPieceBorder::Piece<Dim, IdType> piece{ local.data(), points, connectivity, cells,
+      stmPieces::GhostCellFlags(input), materials.empty() ? nullptr : materials.data(),
+      roles.data() };
+    auto keyOf = [inputPoints](std::int64_t p, double* key) { inputPoints->GetPoint(p, key); };
+    executor.SetProgressRange(0.95, 0.95);
+    const bool ready = frame.CopiesCoordinates(); // the same coordinates on every rank
+    const stm::Status status = function
+      ? stmPieceBorder::ImproveSharedPoints(request.Controller, ready, piece, keyOf,
+          request.Options, projector, executor, request.Border)
+      : stmPieceBorder::ImproveSharedPoints(request.Controller, ready, piece, keyOf,
+          request.Options, stm::NoProjection(), executor, request.Border);
+    if (!status.IsOk())
+    {
+      return status;
+    }
   }
   std::vector<std::int64_t>().swap(originals);
   request.Options.VolumeTargetMaterials = nullptr;
@@ -470,9 +518,13 @@ int stmBoundarySmooth::RequestData(
   this->LargestVolumeErrorBefore = 0.0;
   this->LargestVolumeErrorAfter = 0.0;
   output->Initialize();
+  SmoothRequest request{ this, input, output, {},
+    this->ProjectToFunction ? this->ImplicitFunction : nullptr, {}, {} };
+  request.Controller = stmPieceBorder::ControllerOfPieces(outputVector->GetInformationObject(0));
   auto fail = [&](const std::string& message)
   {
     output->Initialize();
+    TakePartWithNothing(request, false);
     vtkErrorMacro(<< "BoundarySmooth failed: " << message);
     return 0;
   };
@@ -481,7 +533,9 @@ int stmBoundarySmooth::RequestData(
     inputVector[0], input, "cut it with Marching Simplices or tetrahedralize it first", typeError);
   if (dimension < 0)
   {
-    return 1; // an upstream filter was aborted: an empty output, quietly
+    // An empty piece, or an upstream filter was aborted: an empty output, quietly.
+    TakePartWithNothing(request, true);
+    return 1;
   }
   if (dimension == 0)
   {
@@ -522,8 +576,6 @@ int stmBoundarySmooth::RequestData(
                 "OriginalMaterialVolumes or the cell array OriginalMaterial");
   }
 
-  SmoothRequest request{ this, input, output, {},
-    this->ProjectToFunction ? this->ImplicitFunction : nullptr, {}, {} };
   request.Options.Method =
     this->Method == LAPLACIAN ? stm::SmoothingMethod::Laplacian : stm::SmoothingMethod::Taubin;
   request.Options.NumberOfIterations = this->NumberOfIterations;
@@ -564,13 +616,15 @@ int stmBoundarySmooth::RequestData(
     output->Initialize();
     if (this->GetAbortExecute() || status.GetCode() == stm::Status::Code::Aborted)
     {
+      TakePartWithNothing(request, false);
       return 1;
     }
     return fail(status.GetMessage());
   }
   this->NumberOfMovedPoints = static_cast<vtkIdType>(request.Stats.MovedPoints);
   this->NumberOfRejectedMoves = static_cast<vtkIdType>(request.Stats.RejectedMoves);
-  this->NumberOfImprovedPoints = static_cast<vtkIdType>(request.Stats.ImprovedPoints);
+  this->NumberOfImprovedPoints =
+    static_cast<vtkIdType>(request.Stats.ImprovedPoints + request.Border.ImprovedPoints);
   this->NumberOfSplitEdges = request.SplitEdges;
   this->NumberOfKeptPoints = static_cast<vtkIdType>(request.Stats.KeptPoints);
   this->LargestVolumeErrorBefore = request.Stats.LargestVolumeErrorBefore;

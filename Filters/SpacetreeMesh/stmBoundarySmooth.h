@@ -42,9 +42,15 @@
  * A piece of a larger mesh (stmImageToSpacetree::SplitIntoPieces), whose ghost cells carry
  * vtkGhostType: the points of the ghost cells are held where they are and no edge with a held
  * end is split, so that adjacent pieces keep the points and facets they share. The own points'
- * moves then read only the
- * ghost cells that share a point with the own cells (the interior layers stop at held points),
- * the one ring that the cuts keep by default.
+ * moves then read only the ghost cells that share a point with the own cells (the interior
+ * layers stop at held points), the one ring that the cuts keep by default.
+ *
+ * When every rank of an MPI run asks for its own piece (piece k of n on rank k of n, as
+ * pvbatch's UpdatePiece and `mpiexec stmesh` do), the ranks then improve the cells beyond the
+ * quality bounds at the points their pieces share, together: each updates its ghost cells to
+ * the neighbours' smoothed points, and in rank order each improves such cells, moving the shared
+ * points too, and sends what it moved (stmPieceBorder.h). The shared points stay equal bit for
+ * bit. Every rank must then execute the filter, as for VTK's other parallel filters.
  *
  * @sa stmMarchingSimplices stmSeparatingFunction
  */
