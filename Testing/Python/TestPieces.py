@@ -31,6 +31,7 @@ folder = T.env("STM_TEMP_DIR")
 labels_vti = os.path.join(folder, "labels.vti")
 labels_nii = os.path.join(folder, "labels.nii")
 gray_vti = os.path.join(folder, "gray.vti")
+slice_vti = os.path.join(folder, "slice.vti")
 
 # Nested ellipsoids, 46 x 40 x 34 voxels: labels 1 and 2, and a gray image of the outer one.
 z, y, x = np.mgrid[0:34, 0:40, 0:46].astype(float)
@@ -48,6 +49,11 @@ if rank == 0:
     nifti.SetInputData(T.make_image(labels))
     nifti.SetFileName(labels_nii)
     nifti.Write()
+    slice_writer = vtkXMLImageDataWriter()
+    slice_writer.SetInputData(T.make_image(labels[17:18]))  # the middle slice, 2D
+    slice_writer.SetDataModeToBinary()
+    slice_writer.SetFileName(slice_vti)
+    T.check(slice_writer.Write() == 1, "writing " + slice_vti)
 if controller and ranks > 1:
     controller.Barrier()
 
@@ -153,8 +159,44 @@ else:
     # Split Into Pieces: every rank meshes its own root cells and a ghost layer; the cells the
     # ranks own are the serial mesh's (TestSplitPieces.py compares them point for point), and
     # smoothing keeps them (it holds the ghost cells' points).
-    from vtkmodules.vtkCommonCore import vtkIdTypeArray
+    from vtkmodules.vtkCommonCore import vtkDoubleArray, vtkIdTypeArray
     from vtkmodules.vtkCommonDataModel import vtkDataSetAttributes
+
+    def check_ghost_copies(cut, smoothed, what):
+        """After the smoothing's pass over the shared points (stmPieceBorder.h) every point of
+        a rank's ghost cells is where the rank that owns a cell at it put it, bit for bit:
+        each point is named by its position in the cut (the smoothing's input, whose points
+        come first in its output)."""
+        count = cut.GetNumberOfPoints()
+        before = vtk_to_numpy(cut.GetPoints().GetData()).astype(np.float64)
+        after = vtk_to_numpy(smoothed.GetPoints().GetData()).astype(np.float64)
+        corners = smoothed.GetCells().GetConnectivityArray()
+        cells = vtk_to_numpy(corners).reshape(smoothed.GetNumberOfCells(), -1)
+        ghost = vtk_to_numpy(
+            smoothed.GetCellData().GetArray(vtkDataSetAttributes.GhostArrayName())) != 0
+        own = np.unique(cells[~ghost])
+        own = own[own < count]
+        copies = np.setdiff1d(np.unique(cells[ghost]), own)
+        send, received = vtkDoubleArray(), vtkDoubleArray()
+        for value in np.hstack([before[own], after[own]]).ravel():
+            send.InsertNextValue(value)
+        controller.AllGatherV(send, received)
+        rows = vtk_to_numpy(received).reshape(-1, 6)
+        owners = {tuple(row[:3]): tuple(row[3:]) for row in rows}
+        T.check(len(copies) > 0, "%s: rank %d has no ghost points" % (what, rank))
+        stale = sum(1 for p in copies if owners.get(tuple(before[p])) != tuple(after[p]))
+        T.check_equal(stale, 0, "%s: rank %d's ghost points unlike their owners' (of %d)" % (
+            what, rank, len(copies)))
+
+    # The 2D slice: the ghost copies only (the serial references above are 3D).
+    stages = [ImageToSpacetree(Input=simple.XMLImageDataReader(  # noqa: F821
+        FileName=[slice_vti]), SplitIntoPieces=1)]
+    for make in (SpacetreeBalance, SpacetreeTessellate, VertexSnap,  # noqa: F821
+                 MarchingSimplices, BoundarySmooth):  # noqa: F821
+        stages.append(make(Input=stages[-1]))
+    objects = update_without_errors(stages, "split 2D slice")
+    check_ghost_copies(objects[-2].GetOutputDataObject(0), objects[-1].GetOutputDataObject(0),
+                       "split 2D slice")
     for name, source in (("vti", simple.XMLImageDataReader(FileName=[labels_vti])),
                          ("nifti", NIfTIReaderSpacetreeMesh(FileName=labels_nii))):  # noqa: F821
         stages = [ImageToSpacetree(Input=source, SplitIntoPieces=1)]  # noqa: F821
@@ -162,6 +204,8 @@ else:
                      MarchingSimplices, BoundarySmooth):  # noqa: F821
             stages.append(make(Input=stages[-1]))
         objects = update_without_errors(stages, "split " + name)
+        check_ghost_copies(objects[-2].GetOutputDataObject(0),
+                           objects[-1].GetOutputDataObject(0), "split " + name)
         for index, what in ((-2, "cut"), (-1, "smoothed")):
             mesh = objects[index].GetOutputDataObject(0)
             ghosts = vtk_to_numpy(
