@@ -410,26 +410,23 @@ inline void ExpectParentArrays(vtkUnstructuredGrid* input, vtkUnstructuredGrid* 
     {
       EXPECT_EQ(names->GetValue(c), std::to_string(static_cast<long long>(id))) << c;
     }
+    double bounds[6], centroid[3] = { 0, 0, 0 }, x[3];
+    input->GetCellBounds(static_cast<vtkIdType>(id), bounds);
+    const double side =
+      std::max({ bounds[1] - bounds[0], bounds[3] - bounds[2], bounds[5] - bounds[4] });
+    const double margin = 1e-9 + growth * side;
+    vtkIdList* ids = cut->GetCell(c)->GetPointIds();
+    for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k)
     {
-      double bounds[6], centroid[3] = { 0, 0, 0 }, x[3];
-      input->GetCellBounds(static_cast<vtkIdType>(id), bounds);
-      const double side =
-        std::max({ bounds[1] - bounds[0], bounds[3] - bounds[2], bounds[5] - bounds[4] });
-      const double margin = 1e-9 + growth * side;
-      vtkIdList* ids = cut->GetCell(c)->GetPointIds();
-      for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k)
-      {
-        cut->GetPoint(ids->GetId(k), x);
-        for (int a = 0; a < 3; ++a)
-        {
-          centroid[a] += x[a] / ids->GetNumberOfIds();
-        }
-      }
+      cut->GetPoint(ids->GetId(k), x);
       for (int a = 0; a < 3; ++a)
       {
-        misplaced +=
-          centroid[a] < bounds[2 * a] - margin || centroid[a] > bounds[2 * a + 1] + margin;
+        centroid[a] += x[a] / ids->GetNumberOfIds();
       }
+    }
+    for (int a = 0; a < 3; ++a)
+    {
+      misplaced += centroid[a] < bounds[2 * a] - margin || centroid[a] > bounds[2 * a + 1] + margin;
     }
   }
   EXPECT_EQ(misplaced, 0);
