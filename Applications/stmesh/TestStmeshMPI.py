@@ -127,17 +127,25 @@ def signed_volume(a, b, c, d):
             u[2] * (v[0] * w[1] - v[1] * w[0])) / 6.0
 
 
-def global_mesh(grids):
-    """Checks the global numbering of the pieces and returns the mesh they make together:
-    (coordinates per global point id, cells as (sorted global ids, material), volume per
-    material)."""
+def piece_ranks(path):
+    """The rank that wrote each piece a .pvtu names (mesh/mesh_R.vtu), in its order."""
+    with open(path) as summary:
+        text = summary.read()
+    return [int(part.split('"')[0].rsplit("_", 1)[1].split(".")[0])
+            for part in text.split('<Piece Source="')[1:]]
+
+
+def global_mesh(grids, ranks=None):
+    """Checks the global numbering of the pieces (written by `ranks`, by default 0, 1, ...)
+    and returns the mesh they make together: (coordinates per global point id, cells as (sorted
+    global ids, material), volume per material)."""
     from vtkmodules.vtkCommonDataModel import vtkDataSetAttributes
     duplicate = vtkDataSetAttributes.DUPLICATEPOINT
     coordinates = {}
     owner = {}
     cells = []
     volumes = {}
-    for rank, grid in enumerate(grids):
+    for rank, grid in zip(ranks or range(len(grids)), grids):
         point_data, cell_data = grid.GetPointData(), grid.GetCellData()
         point_ids = point_data.GetArray("GlobalPointIds")
         ghosts = point_data.GetArray("vtkGhostType")
@@ -372,6 +380,43 @@ def case_border_quality(c):
               "%d ranks: the summary's quality: %s" % (ranks, quality["worst_condition"]))
         outer[ranks] = facets_of_one_cell(cells)
     check(outer[2] == outer[1], "2 ranks: %d outer facets, 1 rank %d" % (outer[2], outer[1]))
+
+
+def case_empty_pieces(c):
+    # A small ball in a corner of a long image on 6 ranks: most pieces hold no body voxel within
+    # their ghost box. Those ranks mesh nothing, quietly (no error, no warning of an empty cut),
+    # write no piece file (the .pvtu names the others), and the union is the one-rank mesh: the
+    # same cells by coordinates without smoothing, the same volumes smoothed.
+    vtk = T.vtk_modules()
+    image = T.filled_image(vtk, (160, 48, 40), 3, "labels",
+                           lambda i, j, k: 1 if (i - 6) ** 2 + (j - 24) ** 2 + (k - 20) ** 2 < 25
+                           else 0)
+    errors = []
+    writer = T.watched(vtk["vtkNIFTIImageWriter"](), errors)
+    writer.SetInputData(image)
+    writer.SetFileName(c.path("corner.nii"))
+    writer.Write()
+    check(not errors, "cannot write corner.nii: %s" % errors)
+    for extra in (["--smooth-iterations", "0"], []):
+        meshes = {}
+        for ranks in (1, 6):
+            output = c.path("e%d%s.pvtu" % (ranks, "u" if extra else "s"))
+            _, out, err = c.run_ranks(ranks, [c.path("corner.nii"), "-o", output] + extra)
+            check("warning" not in err, "%d ranks: a warning: %s" % (ranks, err))
+            grids = read_pieces(output)
+            if ranks > 1:
+                check(0 < len(grids) < ranks, "%d pieces written by %d ranks: no empty piece" % (
+                    len(grids), ranks))
+            coordinates, cells, volumes = global_mesh(grids, piece_ranks(output))
+            meshes[ranks] = (cell_set(coordinates, cells), outer_facets(cells), volumes)
+        if extra:
+            check(meshes[6][0] == meshes[1][0], "6 ranks: not the one-rank cells")
+        check(meshes[6][1] == meshes[1][1], "6 ranks: %d outer facets, 1 rank %d" % (
+            meshes[6][1], meshes[1][1]))
+        for material, volume in meshes[1][2].items():
+            check(abs(meshes[6][2].get(material, 0.0) - volume) <= 0.01 * volume,
+                  "6 ranks: material %d has volume %g, 1 rank %g" % (
+                      material, meshes[6][2].get(material, 0.0), volume))
 
 
 def case_errors(c):

@@ -68,6 +68,7 @@
 #include "vtkIntArray.h"
 #include "vtkLongLongArray.h"
 #include "vtkMatrix4x4.h"
+#include "vtkMultiProcessController.h"
 #include "vtkNew.h"
 #include "vtkPlane.h"
 #include "vtkPointData.h"
@@ -2157,13 +2158,24 @@ vtkSmartPointer<vtkImageData> MergeLabels(
 // previous filter (and, once unreferenced, its data) can be freed; this keeps the peak memory
 // near two stages' worth instead of all of them.
 
-/// Runs one filter on input port 0 and returns a copy of its output (a vtkUnstructuredGrid, or
-/// the cut's surface as a vtkPolyData); adds its wall time to the report.
-/// Runs filter on input; piece k of n asks the filter for that piece of its output (the
-/// spacetree stage under MPI, stmImageToSpacetree::SplitIntoPieces).
-vtkSmartPointer<vtkPointSet> RunFilter(vtkAlgorithm* filter, vtkDataObject* input,
-  const std::string& context, StageReport& report, int piece = 0, int pieces = 1)
+/// The piece every stage is asked for: under MPI rank k of n meshes piece k of n (set by Run).
+/// The stages after the spacetree then give a rank whose piece holds no body an empty output
+/// quietly, as in pvbatch, and the smoothing's ranks improve their shared points together.
+struct MeshingPiece
 {
+  int Piece = 0;
+  int Pieces = 1;
+};
+MeshingPiece CurrentPiece;
+
+/// Runs one filter on input port 0 and returns a copy of its output (a vtkUnstructuredGrid, or
+/// the cut's surface as a vtkPolyData); adds its wall time to the report. The filter is asked
+/// for piece CurrentPiece.
+vtkSmartPointer<vtkPointSet> RunFilter(
+  vtkAlgorithm* filter, vtkDataObject* input, const std::string& context, StageReport& report)
+{
+  const int piece = CurrentPiece.Piece;
+  const int pieces = CurrentPiece.Pieces;
   Watch(filter);
   filter->SetInputDataObject(0, input);
   const Clock::time_point start = Clock::now();
@@ -2185,10 +2197,10 @@ vtkSmartPointer<vtkPointSet> RunFilter(vtkAlgorithm* filter, vtkDataObject* inpu
 }
 
 vtkSmartPointer<vtkUnstructuredGrid> RunStage(vtkAlgorithm* filter, vtkDataObject* input,
-  const std::string& context, StageReport& report, bool isSpacetree, int piece = 0, int pieces = 1)
+  const std::string& context, StageReport& report, bool isSpacetree)
 {
   vtkSmartPointer<vtkUnstructuredGrid> copy =
-    vtkUnstructuredGrid::SafeDownCast(RunFilter(filter, input, context, report, piece, pieces));
+    vtkUnstructuredGrid::SafeDownCast(RunFilter(filter, input, context, report));
   if (!copy)
   {
     throw Failure(context + ": the filter produced no unstructured grid");
@@ -2727,12 +2739,20 @@ void WritePieces(vtkPointSet* mesh, const std::string& path, const std::string& 
   const std::string stem = path.substr(0, path.size() - 5); // without ".pvtu"
   const std::string piece =
     stem + "/" + FileName(stem) + "_" + std::to_string(parallel.Rank()) + ".vtu";
+  report.Seconds = SecondsSince(start);
+  if (mesh->GetNumberOfCells() == 0)
+  {
+    // A piece without body (a small body on many ranks): VTK's writer writes no file for it,
+    // and the .pvtu names only the others.
+    RecordResources(report);
+    report.Description = "no cells: no piece file";
+    return;
+  }
   report.FileBytes = FileSize(piece);
   if (report.FileBytes <= 0)
   {
     throw Failure(context + ": the piece '" + piece + "' is missing or empty");
   }
-  report.Seconds = SecondsSince(start);
   DescribeWrittenFile(piece, report);
 }
 
@@ -3951,17 +3971,30 @@ vtkSmartPointer<vtkPointSet> RunCut(
   std::ostringstream description;
   description << report.Cells << " cells, " << report.Points << " points";
   report.Description = description.str();
-  // An empty side usually means a sphere or an iso-value that misses the body.
+  // An empty side usually means a sphere or an iso-value that misses the body. Under MPI a
+  // piece may lack a side (a small body on many ranks): the sides of all pieces count, and
+  // rank 0 warns.
+  long long counts[3] = { report.Cells, report.InsideCells, report.OutsideCells };
+  if (CurrentPiece.Pieces > 1)
+  {
+    const long long mine[3] = { counts[0], counts[1], counts[2] };
+    vtkMultiProcessController::GetGlobalController()->AllReduce(
+      mine, counts, 3, vtkCommunicator::SUM_OP);
+    if (CurrentPiece.Piece != 0)
+    {
+      return mesh;
+    }
+  }
   std::string emptiness;
-  if (outputMode == stmMarchingSimplices::SURFACE && report.Cells == 0)
+  if (outputMode == stmMarchingSimplices::SURFACE && counts[0] == 0)
   {
     emptiness = "does not cross the mesh: the surface is empty";
   }
-  else if (report.InsideCells == 0 && options.KeepSide != stmMarchingSimplices::OUTSIDE)
+  else if (counts[1] == 0 && options.KeepSide != stmMarchingSimplices::OUTSIDE)
   {
     emptiness = "encloses no part of the mesh: the cut has no inside cells";
   }
-  else if (report.OutsideCells == 0 && options.KeepSide != stmMarchingSimplices::INSIDE)
+  else if (counts[2] == 0 && options.KeepSide != stmMarchingSimplices::INSIDE)
   {
     emptiness = "encloses the whole mesh: the cut has no outside cells";
   }
@@ -3978,12 +4011,9 @@ vtkSmartPointer<vtkPointSet> RunCut(
 /// the side --keep asks for or the surface, by stmMarchingSimplices on the smoothed mesh. The
 /// cut points and the snapped points carry f = iso exactly, so that run splits nothing: its
 /// surface is the smoothed interface and its sides are the smoothed cut's cells. The sphere is
-/// known exactly, so the smoothed surface points go back onto it. Under MPI, rank k of n asks
-/// for piece k of n: the ranks then improve the cells at the points their pieces share together
-/// (stmBoundarySmooth).
+/// known exactly, so the smoothed surface points go back onto it.
 vtkSmartPointer<vtkPointSet> RunSmooth(vtkSmartPointer<vtkUnstructuredGrid> grid,
-  const Options& options, const SeparatingSource& source, StageReport& report, int piece,
-  int pieces)
+  const Options& options, const SeparatingSource& source, StageReport& report)
 {
   vtkNew<stmBoundarySmooth> smooth;
   smooth->SetNumberOfIterations(options.SmoothIterations);
@@ -3998,7 +4028,7 @@ vtkSmartPointer<vtkPointSet> RunSmooth(vtkSmartPointer<vtkUnstructuredGrid> grid
     smooth->SetProjectToFunction(true);
     smooth->SetImplicitFunction(source.Sphere);
   }
-  grid = RunStage(smooth, grid, "smoothing the surface", report, false, piece, pieces);
+  grid = RunStage(smooth, grid, "smoothing the surface", report, false);
   report.Smooth = true;
   report.MovedPoints = static_cast<long long>(smooth->GetNumberOfMovedPoints());
   report.RejectedMoves = static_cast<long long>(smooth->GetNumberOfRejectedMoves());
@@ -5027,6 +5057,7 @@ void CheckOptionsForRanks(const Options& options, int ranks)
 
 int Run(const Options& options, const ParallelRun& parallel)
 {
+  CurrentPiece = { parallel.Rank(), parallel.Ranks() };
   RunSummary summary;
   summary.MinorFaultsAtStart = CurrentResourceUsage().MinorPageFaults;
   std::string input = options.Input;
@@ -5153,8 +5184,7 @@ int Run(const Options& options, const ParallelRun& parallel)
     vtkNew<stmImageToSpacetree> spacetree;
     ConfigureSpacetree(spacetree, options, image, summary.Image);
     spacetree->SetSplitIntoPieces(parallel.Ranks() > 1);
-    grid = RunStage(spacetree, image, "building the spacetree", spacetreeReport, true,
-      parallel.Rank(), parallel.Ranks());
+    grid = RunStage(spacetree, image, "building the spacetree", spacetreeReport, true);
     spacetreeReport.ThinVoxels = static_cast<long long>(spacetree->GetNumberOfThinVoxels());
     if (spacetree->GetNumberOfThinVoxels() > 0)
     {
@@ -5306,8 +5336,7 @@ int Run(const Options& options, const ParallelRun& parallel)
     {
       vtkSmartPointer<vtkUnstructuredGrid> cutMesh = vtkUnstructuredGrid::SafeDownCast(mesh);
       mesh = nullptr;
-      mesh = RunSmooth(
-        std::move(cutMesh), options, source, smoothReport, parallel.Rank(), parallel.Ranks());
+      mesh = RunSmooth(std::move(cutMesh), options, source, smoothReport);
     }
     summary.Stages.push_back(smoothReport);
   }

@@ -1344,6 +1344,14 @@ int stmImageToSpacetree::RequestData(
       request.Sizing = CropVoxels(request.Sizing, voxelDims, first, count);
     }
     std::copy(count, count + 3, voxelDims);
+    if (std::none_of(materials.begin(), materials.end(),
+          [](stm::MaterialIndex m) { return m != stm::BackgroundMaterial; }))
+    {
+      // No body voxel within two root cells of the piece: the body, and the background cells
+      // next to it, lie in other pieces (a small body on many ranks).
+      output->Initialize();
+      return 1;
+    }
   }
 
   stmSMPExecutor executor(this);
