@@ -389,8 +389,8 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
     request.BorderPassTaken = true;
     const std::vector<std::int64_t> materials = stmCutInput::CellMaterials(input);
     const stmPieceBorder::Piece<Dim, IdType> piece{ local.data(), points, connectivity, cells,
-      stmPieces::GhostCellFlags(input), materials.empty() ? nullptr : materials.data(),
-      roles.data() };
+      stmPieces::GhostCellFlags(input), held.empty() ? nullptr : held.data(),
+      materials.empty() ? nullptr : materials.data(), roles.data() };
     auto keyOf = [inputPoints](std::int64_t p, double* key) { inputPoints->GetPoint(p, key); };
     executor.SetProgressRange(0.95, 0.95);
     const bool ready = frame.CopiesCoordinates(); // the same coordinates on every rank

@@ -101,8 +101,9 @@ struct Piece
   const IdType* Connectivity = nullptr;
   std::int64_t NumberOfCells = 0;
   const unsigned char* GhostCells = nullptr;
-  const std::int64_t* Materials = nullptr; // per cell, or null
-  const std::uint8_t* Roles = nullptr;     // the smoother's PointRole per point
+  const std::uint8_t* GhostPoints = nullptr; // per point: 1 for a point of a ghost cell
+  const std::int64_t* Materials = nullptr;   // per cell, or null
+  const std::uint8_t* Roles = nullptr;       // the smoother's PointRole per point
 };
 
 namespace detail
@@ -155,7 +156,7 @@ stm::Status ImproveSharedPoints(vtkMultiProcessController* controller, bool read
 {
   constexpr int Corners = Dim + 1;
   constexpr int Width = 3 + Dim; // a record: the key, then the position
-  const bool hasGhosts = ready && piece.GhostCells &&
+  const bool hasGhosts = ready && piece.GhostCells && piece.GhostPoints &&
     std::any_of(piece.GhostCells, piece.GhostCells + piece.NumberOfCells,
       [](unsigned char g) { return g != 0; });
   int local[2] = { ready ? 1 : 0, hasGhosts ? 1 : 0 }, all[2] = { 0, 0 };
@@ -169,15 +170,14 @@ stm::Status ImproveSharedPoints(vtkMultiProcessController* controller, bool read
   const std::int64_t points = active ? piece.NumberOfPoints : 0;
   const std::int64_t cells = active ? piece.NumberOfCells : 0;
 
-  // Own points, ghost points (those of ghost cells) and border points (both).
+  // Own points (those of own cells); with the ghost points, the border points (both).
+  const std::uint8_t* ghost = piece.GhostPoints;
   std::vector<std::uint8_t> own(static_cast<std::size_t>(points), 0);
-  std::vector<std::uint8_t> ghost(static_cast<std::size_t>(points), 0);
   for (std::int64_t c = 0; c < cells; ++c)
   {
-    std::vector<std::uint8_t>& mask = piece.GhostCells[c] ? ghost : own;
-    for (int v = 0; v < Corners; ++v)
+    for (int v = 0; v < Corners && !piece.GhostCells[c]; ++v)
     {
-      mask[static_cast<std::size_t>(piece.Connectivity[c * Corners + v])] = 1;
+      own[static_cast<std::size_t>(piece.Connectivity[c * Corners + v])] = 1;
     }
   }
   auto isBorder = [&](std::int64_t p) { return own[p] && ghost[p]; };
