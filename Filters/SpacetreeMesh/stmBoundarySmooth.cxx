@@ -10,6 +10,7 @@
 #include "Cut/LevelSetProjection.h"
 #include "Smooth/BoundarySmooth.h"
 #include "Smooth/InteriorEdgeSplit.h"
+#include "Spacetree/RootPieces.h"
 
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
@@ -290,6 +291,32 @@ std::vector<std::uint8_t> GhostCellPoints(vtkUnstructuredGrid* input, const IdTy
   return held;
 }
 
+/// The tessellation's root colours (stmPieces::RootColourName), by which the smoothing orders
+/// its moves alike in a whole mesh and in its pieces; null without them, or with values that are
+/// no root colours of a Dim-dimensional grid (a warning: e.g. a 3D mesh's array on a 2D mesh).
+template <int Dim>
+const std::uint8_t* RootColours(vtkAlgorithm* filter, vtkUnstructuredGrid* input)
+{
+  auto* colours = vtkUnsignedCharArray::SafeDownCast(
+    input->GetCellData()->GetAbstractArray(stmPieces::RootColourName));
+  if (!colours || colours->GetNumberOfComponents() != 1 ||
+    colours->GetNumberOfTuples() != input->GetNumberOfCells() || colours->GetNumberOfTuples() == 0)
+  {
+    return nullptr;
+  }
+  const int limit = stm::RootColouring<Dim>::NumberOfColours;
+  const unsigned char* values = colours->GetPointer(0);
+  if (*std::max_element(values, values + colours->GetNumberOfTuples()) >= limit)
+  {
+    vtkWarningWithObjectMacro(filter,
+      "the cell array " << stmPieces::RootColourName << " holds values of " << limit
+                        << " or more, no root colours of a " << Dim
+                        << "D spacetree: the smoothing orders its moves by point ids instead");
+    return nullptr;
+  }
+  return values;
+}
+
 template <int Dim, class IdType>
 stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
 {
@@ -307,6 +334,7 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
   const std::vector<std::uint8_t> held = GhostCellPoints<Dim>(input, connectivity);
   request.Options.HeldPoints = held.empty() ? nullptr : held.data();
   request.Options.GhostCells = held.empty() ? nullptr : stmPieces::GhostCellFlags(input);
+  request.Options.CellRootColours = RootColours<Dim>(request.Filter, input);
 
   // The projector: Newton steps onto f = 0 of the implicit function, in the frame. VTK's
   // implicit functions may update a transform when evaluated, so evaluations are serialised.
@@ -408,10 +436,13 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
   request.Options.VolumeTargetMaterials = nullptr;
   request.Options.HeldPoints = nullptr;
   request.Options.GhostCells = nullptr;
+  request.Options.CellRootColours = nullptr;
 
-  // The output: the input's cells and arrays, the moved points in the input's precision.
+  // The output: the input's cells and arrays, the moved points in the input's precision. The
+  // root colours served the smoothing alone.
   vtkUnstructuredGrid* output = request.Output;
   output->ShallowCopy(input);
+  output->GetCellData()->RemoveArray(stmPieces::RootColourName);
   vtkNew<vtkPoints> moved;
   moved->SetDataType(inputPoints->GetDataType());
   moved->DeepCopy(inputPoints);

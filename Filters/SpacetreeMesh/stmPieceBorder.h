@@ -335,6 +335,7 @@ stm::Status ImproveSharedPoints(vtkMultiProcessController* controller, bool read
         turnOptions.SmallPartPoints = 0; // the kept points are not movable (their role)
         turnOptions.HeldPoints = held.data();
         turnOptions.GhostCells = nullptr;
+        turnOptions.CellRootColours = nullptr; // the whole piece's cells, not the submesh's
         const std::int64_t* materials = piece.Materials ? subMaterials.data() : nullptr;
         const auto subCells = static_cast<std::int64_t>(subConnectivity.size() / Corners);
         stm::BoundarySmoother<Dim> smoother;

@@ -97,6 +97,11 @@ inline void RequestWholeGrayImage(vtkInformation* imageInfo)
 /// Field array of a tree or mesh that is a piece of a larger image's (SplitIntoPieces).
 constexpr const char* PieceMarkerName = "SpacetreeMeshPiece";
 
+/// Cell array of the tessellation and the meshes cut from it: per cell the colour of the root
+/// cell it lies in (stm::RootColouring), by which stmBoundarySmooth orders its moves alike in a
+/// whole mesh and in every piece of it. The smoothing removes it from its output.
+constexpr const char* RootColourName = "RootColour";
+
 /// The number of pieces a request asks for (1 when it names none).
 inline int RequestedNumberOfPieces(vtkInformation* info)
 {

@@ -441,13 +441,37 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   output->SetCells(types, cellArray);
   output->GetCellData()->AddArray(materials);
   output->GetCellData()->SetActiveScalars("Material");
+  const std::vector<std::int64_t>& leafCells = tessellator.GetLeafCellOffsets();
+  {
+    // The colour of each cell's root cell in the whole grid, by which the smoothing orders its
+    // moves alike in every piece (stm::RootColouring). A piece's lattice starts at its ghost
+    // box, a root cell's corner.
+    stm::LatticeIndex<Dim> rootOffset{};
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      rootOffset[axis] = std::llround(geometry.LatticeOffset[axis]) / tree.GetRootCellSize()[axis];
+    }
+    vtkNew<vtkUnsignedCharArray> colours;
+    colours->SetName(stmPieces::RootColourName);
+    colours->SetNumberOfValues(cells);
+    unsigned char* colourValues = colours->GetPointer(0);
+    vtkSMPTools::For(0, tree.GetNumberOfLeaves(),
+      [&](vtkIdType begin, vtkIdType end)
+      {
+        for (vtkIdType leaf = begin; leaf < end; ++leaf)
+        {
+          std::fill(colourValues + leafCells[leaf], colourValues + leafCells[leaf + 1],
+            stm::RootColouring<Dim>::LeafColour(tree, leaf, rootOffset));
+        }
+      });
+    output->GetCellData()->AddArray(colours);
+  }
   if (geometry.IsPiece)
   {
     // A cell is a ghost where its leaf is.
     std::vector<std::uint8_t> ghostLeaves(static_cast<std::size_t>(tree.GetNumberOfLeaves()));
     stmSpacetreeData::MarkLeavesOutsideOwnedBox<Dim>(
       tree, geometry, 0, vtkDataSetAttributes::DUPLICATECELL, ghostLeaves.data());
-    const std::vector<std::int64_t>& leafCells = tessellator.GetLeafCellOffsets();
     vtkSmartPointer<vtkUnsignedCharArray> ghosts = stmPieces::NewGhostArray(cells);
     unsigned char* ghostValues = ghosts->GetPointer(0);
     vtkSMPTools::For(0, tree.GetNumberOfLeaves(),

@@ -5,7 +5,9 @@ cells each piece owns (vtkGhostType 0) are exactly the serial mesh's cells there
 pieces share their boundary's points and facets, and the pieces together are the serial mesh:
 2D and 3D, several labels, balance levels 1 and 2, 2, 3 and 5 pieces, point and cell labels.
 The cuts keep the ghost cells within the rings the request asks for (its ghost levels), at least
-the one ring of cells that share a point with the own cells. BoundarySmooth holds the points of
+the one ring of cells that share a point with the own cells. Every cell carries the colour of its
+root cell in the whole grid (RootColour, by which the smoothing orders its moves), in the pieces
+as in the serial mesh. BoundarySmooth holds the points of
 a piece's ghost cells: the smoothed pieces still match (the owned cells together have the serial
 mesh's cells and boundary facets, by coordinates), differ from the serial mesh only near where
 they meet, and are the same with one ring of ghost cells as with all the piece meshed.
@@ -78,8 +80,32 @@ def cells(mesh, nodes):
     corners = np.take_along_axis(corners, order[:, :, None], axis=1).reshape(len(corners), -1)
     label = "BoundaryLabels" if mesh.GetCellData().GetArray("BoundaryLabels") else (
         "OriginalMaterial" if mesh.IsA("vtkPolyData") else "Material")
-    rows = np.column_stack([corners, T.cell_array(mesh, label)[own]])
+    columns = [corners, T.cell_array(mesh, label)[own]]
+    if mesh.GetCellData().GetArray("RootColour") is not None:
+        columns.append(T.cell_array(mesh, "RootColour")[own])
+    rows = np.column_stack(columns)
     return rows[np.lexsort(rows.T[::-1])]
+
+
+def check_root_colours(tree, mesh, dimension, what):
+    """Every cell's RootColour is the colour of the root cell that holds its centroid: its root
+    indices modulo 3, axis 0 the least significant (images of unit spacing along x, y, z)."""
+    field = tree.GetOutput().GetFieldData()
+    origin = vtk_to_numpy(field.GetArray("SpacetreeLatticeOrigin"))
+    axes = vtk_to_numpy(field.GetArray("SpacetreeLatticeAxes")).reshape(3, 3)
+    image_axes = vtk_to_numpy(field.GetArray("SpacetreeImageAxes"))
+    root_size = vtk_to_numpy(field.GetArray("SpacetreeCellSizes"))[:dimension]
+    centroids = T.points(mesh)[T.connectivity(mesh, dimension + 1)].mean(axis=1)
+    expected = np.zeros(len(centroids), dtype=np.int64)
+    for axis in reversed(range(dimension)):
+        image_axis = image_axes[axis]
+        edge = axes[image_axis][image_axis] * root_size[axis]
+        index = np.floor((centroids[:, image_axis] - origin[image_axis]) / edge).astype(np.int64)
+        expected = 3 * expected + index % 3
+    colours = T.cell_array(mesh, "RootColour").astype(np.int64)
+    T.check(np.array_equal(colours, expected), "%s: %d cells have another root colour than the "
+            "root cell around their centroid" % (what, np.count_nonzero(colours != expected)))
+    T.check(len(np.unique(colours)) > 1, what + ": one root colour only")
 
 
 def check_pieces(labels, dimension, cell_data, balance_level, cut, what, gray=None,
@@ -93,6 +119,8 @@ def check_pieces(labels, dimension, cell_data, balance_level, cut, what, gray=No
             what + ": a serial mesh has ghost cells")
     expected = cells(reference, nodes)
     T.check(len(expected) > 500, what + ": the serial mesh has %d cells" % len(expected))
+    if cut is False:
+        check_root_colours(serial[0], reference, dimension, what)
     for pieces in piece_counts:
         together = []
         for piece in range(pieces):
@@ -121,7 +149,7 @@ def check_pieces(labels, dimension, cell_data, balance_level, cut, what, gray=No
                         "%s: piece %d of %d: the cut keeps %d rings of ghost cells, not 1" % (
                             what, piece, pieces, ghost_rings(mesh, nodes)))
             together.append(own)
-        together = np.concatenate(together)
+        together = np.concatenate([rows for rows in together if len(rows)])
         together = together[np.lexsort(together.T[::-1])]
         T.check(together.shape == expected.shape,
                 "%s, %d pieces: %d cells owned in all, the serial mesh has %d"

@@ -92,6 +92,43 @@ struct RootBox
   }
 };
 
+/// Root cells coloured by their indices modulo 3 along each axis: colour = sum over the axes of
+/// (index mod 3) * 3^axis, 3^Dim colours. The closures of two root cells of one colour share no
+/// point (their indices differ by 3 or more along some axis), and every root cell whose closure
+/// holds a given point has a colour of its own (at most two indices per axis). The smoothing
+/// orders its moves by these colours (BoundarySmoothOptions::CellRootColours), so the colours
+/// must be those of the whole root grid also in a piece: `root` is a root cell's index in the
+/// whole grid.
+template <int Dim>
+struct RootColouring
+{
+  static constexpr int NumberOfColours = Dim == 1 ? 3 : Dim == 2 ? 9 : Dim == 3 ? 27 : 81;
+  static_assert(Dim >= 1 && Dim <= 4, "root colours fit a byte for dimensions 1 to 4");
+
+  static std::uint8_t Colour(const LatticeIndex<Dim>& root)
+  {
+    int colour = 0;
+    for (int axis = Dim - 1; axis >= 0; --axis)
+    {
+      colour = 3 * colour + static_cast<int>(((root[axis] % 3) + 3) % 3);
+    }
+    return static_cast<std::uint8_t>(colour);
+  }
+
+  /// The colour of the root cell of leaf `leaf` of `tree`, whose root index 0 is root
+  /// `rootOffset` of the whole grid (a piece's ghost box; zeros for a whole image).
+  static std::uint8_t LeafColour(
+    const Spacetree<Dim>& tree, std::int64_t leaf, const LatticeIndex<Dim>& rootOffset)
+  {
+    LatticeIndex<Dim> root;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      root[axis] = rootOffset[axis] + tree.LeafAnchors[leaf][axis] / tree.GetRootCellSize()[axis];
+    }
+    return Colour(root);
+  }
+};
+
 /// Whether leaf `leaf` of `tree` lies in the root cells of `box` (in the tree's root indices).
 template <int Dim>
 bool LeafInRootBox(const Spacetree<Dim>& tree, std::int64_t leaf, const RootBox<Dim>& box)

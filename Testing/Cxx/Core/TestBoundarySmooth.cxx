@@ -14,6 +14,7 @@
 #include "Cut/LevelSetProjection.h"
 #include "Cut/MarchingSimplices.h"
 #include "Smooth/BoundarySmooth.h"
+#include "Spacetree/RootPieces.h"
 
 #include <gtest/gtest.h>
 
@@ -605,6 +606,66 @@ TYPED_TEST(BoundarySmoothTest, ThreadCountDoesNotChangeTheResult)
   }
 }
 
+/// Per cell, the root colour (stm::RootColouring) of the cube of `rootEdge` voxels that holds
+/// its centroid: the cells of CutBall lie in voxels, so such cubes serve as root cells.
+template <int D>
+std::vector<std::uint8_t> CubeColours(const SmoothMesh<D>& mesh, double rootEdge)
+{
+  std::vector<std::uint8_t> colours;
+  for (std::int64_t c = 0; c < mesh.NumberOfCells(); ++c)
+  {
+    stm::LatticeIndex<D> root;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      double centroid = 0.0;
+      for (int v = 0; v <= D; ++v)
+      {
+        centroid += mesh.Points[mesh.Cells[c * (D + 1) + v] * D + axis] / (D + 1);
+      }
+      root[axis] = static_cast<std::int64_t>(std::floor(centroid / rootEdge));
+    }
+    colours.push_back(stm::RootColouring<D>::Colour(root));
+  }
+  return colours;
+}
+
+// With root colours the blocks are the points of one colour joined by shared cells, each in one
+// root cell, 3^D colours; the result still does not depend on the number of threads, for root
+// cells of one voxel (many small blocks) and of four (few large ones), and the mesh stays valid
+// with the same volumes as with blocks of consecutive ids, to the volume restoration's tolerance.
+TYPED_TEST(BoundarySmoothTest, RootCellBlocksDoNotDependOnTheThreads)
+{
+  constexpr int D = TypeParam::value;
+  const SmoothMesh<D> input = CutBall<D>(Extent<D>(), 0.35);
+  SmoothMesh<D> byIds = input;
+  const stm::BoundarySmoothStats idStats = Smooth<D>(byIds, stm::BoundarySmoothOptions());
+  EXPECT_FALSE(idStats.RootCellBlocks);
+  for (const double rootEdge : { 1.0, 4.0 })
+  {
+    const std::vector<std::uint8_t> colours = CubeColours<D>(input, rootEdge);
+    stm::BoundarySmoothOptions options;
+    options.NumberOfInteriorLayers = 3;
+    options.CellRootColours = colours.data();
+    SmoothMesh<D> sequential = input, pooled = input;
+    stm::SequentialExecutor one;
+    stm::ThreadPoolExecutor four(4);
+    const stm::BoundarySmoothStats a = Smooth<D>(sequential, options, one);
+    const stm::BoundarySmoothStats b = Smooth<D>(pooled, options, four);
+    EXPECT_TRUE(a.RootCellBlocks);
+    EXPECT_EQ(a.NumberOfColours, stm::RootColouring<D>::NumberOfColours);
+    EXPECT_EQ(std::memcmp(sequential.Points.data(), pooled.Points.data(),
+                sequential.Points.size() * sizeof(double)),
+      0)
+      << "root edge " << rootEdge;
+    EXPECT_EQ(a.MovedPoints, b.MovedPoints);
+    EXPECT_GT(a.MovedPoints, idStats.MovedPoints / 2);
+    EXPECT_EQ(a.RejectedMoves, b.RejectedMoves);
+    EXPECT_EQ(a.VolumeAfter, b.VolumeAfter);
+    EXPECT_TRUE(Check<D>(sequential).IsValid());
+    EXPECT_NE(sequential.Points, byIds.Points); // another order of the moves
+  }
+}
+
 // The interior layers are relaxed after every InteriorRelaxationInterval-th iteration and after
 // the last: 20 iterations make 20, 5 (4, 8, ..., 20) and 7 (3, 6, ..., 18, 20) passes at
 // intervals 1, 4 and 3, and one pass (after the last) at an interval beyond the iteration
@@ -1166,6 +1227,13 @@ TEST(BoundarySmooth, RejectsBadOptionsAndIds)
   EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
   options = stm::BoundarySmoothOptions();
   options.VolumeTolerance = -1.0;
+  EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
+  options = stm::BoundarySmoothOptions();
+  std::vector<std::uint8_t> colours(static_cast<std::size_t>(mesh.NumberOfCells()), 8);
+  options.CellRootColours = colours.data();
+  EXPECT_TRUE(run(options).IsOk()); // 8 is the last of 3^2 colours
+  mesh.Points = original;
+  colours[7] = 9;
   EXPECT_EQ(run(options).GetCode(), stm::Status::Code::InvalidArgument);
   EXPECT_EQ(mesh.Points, original);
   mesh.Cells[5] = mesh.NumberOfPoints();

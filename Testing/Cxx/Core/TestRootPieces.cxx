@@ -140,6 +140,56 @@ TYPED_TEST(RootPiecesTest, CostsMoveTheCut)
   EXPECT_EQ(stm::PieceRootBox<D>(dims, 2, 0, std::vector<std::int64_t>(3, 1)).Upper[0], 3);
 }
 
+// The root colours: 3^D of them, the index modulo 3 per axis with axis 0 the least significant
+// (negative indices too); the 2^D root cells around any lattice point have distinct colours, and
+// root cells of one colour differ by a multiple of 3 along every axis, so two distinct ones are
+// at least 3 apart along some axis and their closures share no point.
+TYPED_TEST(RootPiecesTest, RootColoursSeparateTheRootCellsAroundAPoint)
+{
+  constexpr int D = TypeParam::value;
+  using Colouring = stm::RootColouring<D>;
+  EXPECT_EQ(Colouring::NumberOfColours, static_cast<int>(std::pow(3, D)));
+  stm::LatticeIndex<D> root{};
+  root[0] = 4;
+  root[D - 1] += 2;
+  EXPECT_EQ(Colouring::Colour(root), D == 1 ? 0 : 1 + static_cast<int>(std::pow(3, D - 1)) * 2);
+  root[0] = -1;
+  EXPECT_EQ(Colouring::Colour(root) % 3, 2);
+  std::vector<stm::LatticeIndex<D>> roots;
+  ForEachIndex<D>(UniformExtents<D>(5),
+    [&](const stm::LatticeIndex<D>& index)
+    {
+      stm::LatticeIndex<D> shifted = index;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        shifted[axis] -= 2;
+      }
+      roots.push_back(shifted);
+    });
+  std::vector<int> used(static_cast<std::size_t>(Colouring::NumberOfColours), 0);
+  for (const auto& a : roots)
+  {
+    const int colour = Colouring::Colour(a);
+    ASSERT_LT(colour, Colouring::NumberOfColours);
+    used[colour] = 1;
+    for (const auto& b : roots)
+    {
+      bool around = true, multiples = true;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        around = around && std::abs(a[axis] - b[axis]) <= 1;
+        multiples = multiples && (a[axis] - b[axis]) % 3 == 0;
+      }
+      EXPECT_EQ(Colouring::Colour(a) == Colouring::Colour(b), multiples);
+      if (around && a != b)
+      {
+        EXPECT_NE(Colouring::Colour(a), Colouring::Colour(b));
+      }
+    }
+  }
+  EXPECT_EQ(std::count(used.begin(), used.end(), 1), Colouring::NumberOfColours);
+}
+
 TEST(RootCellCosts, BoundaryAndBodyVoxels2D)
 {
   // 8 x 6 voxels, material 1 in x 2..4, y 1..2; root cells of 4 x 4 voxels (2 x 2 of them).
