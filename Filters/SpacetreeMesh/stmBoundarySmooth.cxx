@@ -3,6 +3,7 @@
 
 #include "stmCutInput.h"
 #include "stmPieceBorder.h"
+#include "stmPieceExchange.h"
 #include "stmPieces.h"
 #include "stmPlaneFrame.h"
 #include "stmSMPExecutor.h"
@@ -39,6 +40,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -63,6 +65,10 @@ struct SmoothRequest
   vtkMultiProcessController* Controller = nullptr;
   bool BorderPassTaken = false;
   stmPieceBorder::Stats Border;
+  // Whether this rank has taken its part in the agreement on exchanging during the steps
+  // (stmPieceExchange), and whether the ranks exchanged.
+  bool ExchangeAgreed = false;
+  bool Exchanged = false;
 };
 
 /// This rank's part in stmPieceBorder's pass when it has no piece to smooth (`ready`: an empty
@@ -72,6 +78,11 @@ void TakePartWithNothing(SmoothRequest& request, bool ready)
   if (!request.Controller || request.BorderPassTaken)
   {
     return;
+  }
+  if (!request.ExchangeAgreed)
+  {
+    request.ExchangeAgreed = true;
+    stmPieceExchange::AllAgree(request.Controller, false);
   }
   request.BorderPassTaken = true;
   stmSMPExecutor executor(request.Filter);
@@ -335,6 +346,32 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
   request.Options.HeldPoints = held.empty() ? nullptr : held.data();
   request.Options.GhostCells = held.empty() ? nullptr : stmPieces::GhostCellFlags(input);
   request.Options.CellRootColours = RootColours<Dim>(request.Filter, input);
+  // Pieces on the ranks of an MPI run with the tessellation's root colours move every point as
+  // the whole mesh's steps do (stmPieceExchange), if every rank can.
+  std::unique_ptr<stmPieceExchange::Exchange> exchange;
+  stmPieceExchange::Movers movers;
+  if (request.Controller)
+  {
+    request.ExchangeAgreed = true;
+    const bool can = !held.empty() && request.Options.CellRootColours &&
+      request.Coordinates.CopiesCoordinates() && Dim >= 2;
+    if (stmPieceExchange::AllAgree(request.Controller, can))
+    {
+      movers = stmPieceExchange::FindMovers<Dim>(connectivity, cells, points,
+        stmPieces::GhostCellFlags(input), request.Options.CellRootColours);
+      exchange = std::make_unique<stmPieceExchange::Exchange>(
+        request.Controller, stm::RootColouring<Dim>::NumberOfColours);
+      exchange->Build<Dim>(connectivity, cells, points, held.data(), movers,
+        [inputPoints](std::int64_t p, double* key) { inputPoints->GetPoint(p, key); });
+      request.Options.Exchange = exchange.get();
+      request.Options.HeldPoints = movers.Held.data();
+      request.Options.HeldPointsAfterSteps = held.data();
+      request.Exchanged = true;
+      vtkDebugWithObjectMacro(request.Filter,
+        "exchanging " << exchange->GetNumberOfSentPoints() << " points; "
+                      << exchange->GetNumberOfUnmatchedPoints() << " held points unmatched");
+    }
+  }
 
   // The projector: Newton steps onto f = 0 of the implicit function, in the frame. VTK's
   // implicit functions may update a transform when evaluated, so evaluations are serialised.
@@ -410,6 +447,9 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
       roles = smoother.GetPointRoles();
     }
   }
+  request.Options.Exchange = nullptr;
+  request.Options.HeldPoints = held.empty() ? nullptr : held.data();
+  request.Options.HeldPointsAfterSteps = nullptr;
   if (request.Controller)
   {
     // The points the pieces share, and the cells at them (stmPieceBorder), now that every

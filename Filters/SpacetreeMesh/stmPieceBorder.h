@@ -3,11 +3,12 @@
  * @brief   the smoothing's pass over the points that pieces share, for pieces meshed on the
  *          ranks of an MPI run (stmImageToSpacetree::SplitIntoPieces), private to the module
  *
- * Each piece smooths its own points and holds those of its ghost cells, so the points two
- * pieces share stay where the cut put them, and the quality improvement cannot move them. A
- * cell beyond the quality bounds at such a point then stays (the AAL atlas with all 116 labels
- * on 2 ranks: worst condition number 4.54 and smallest dihedral angle 9.1 degrees, against 3.5
- * and 15.0 on one rank). After every rank has smoothed, all ranks together:
+ * Each piece holds the points of its ghost cells in its volume restoration and quality
+ * improvement (the steps before them are exchanged, stmPieceExchange.h), so the quality
+ * improvement cannot move the points two pieces share. A cell beyond the quality bounds at such
+ * a point then stays (the AAL atlas with all 116 labels on 2 ranks, before the exchanged steps:
+ * worst condition number 4.54 and smallest dihedral angle 9.1 degrees, against 3.5 and 15.0 on
+ * one rank). After every rank has smoothed, all ranks together:
  *
  * 1. send the positions of the points of their own cells that have a border point (a point of
  *    an own and of a ghost cell), so that every rank updates the ghost cells next to its own:
@@ -336,6 +337,8 @@ stm::Status ImproveSharedPoints(vtkMultiProcessController* controller, bool read
         turnOptions.HeldPoints = held.data();
         turnOptions.GhostCells = nullptr;
         turnOptions.CellRootColours = nullptr; // the whole piece's cells, not the submesh's
+        turnOptions.Exchange = nullptr;
+        turnOptions.HeldPointsAfterSteps = nullptr;
         const std::int64_t* materials = piece.Materials ? subMaterials.data() : nullptr;
         const auto subCells = static_cast<std::int64_t>(subConnectivity.size() / Corners);
         stm::BoundarySmoother<Dim> smoother;

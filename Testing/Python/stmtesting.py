@@ -13,6 +13,7 @@ from vtkmodules.vtkCommonDataModel import (
     VTK_QUAD,
     VTK_TETRA,
     VTK_TRIANGLE,
+    vtkDataSetAttributes,
     vtkImageData,
 )
 
@@ -426,3 +427,42 @@ def atlas_chain(path):
     reader = vtkNIFTIImageReader()
     reader.SetFileName(path)
     return (reader,) + spacetree_chain(reader)
+
+
+def nested_ellipsoids(shape):
+    """Nested ellipsoids (labels 1..3) in a [z, y, x] array, and a one-voxel layer of label 4."""
+    z, y, x = np.meshgrid(*[np.arange(n) + 0.5 for n in shape], indexing="ij")
+    centre = [n / 2.0 for n in shape]
+    r = np.sqrt(sum(((c - m) / (0.45 * n)) ** 2 for c, m, n in zip((z, y, x), centre, shape)))
+    labels = np.zeros(shape, dtype=np.uint8)
+    labels[r < 1.0] = 1
+    labels[r < 0.7] = 2
+    labels[r < 0.4] = 3
+    labels[(r >= 0.55) & (r < 0.55 + 1.0 / max(shape))] = 4
+    return labels
+
+
+def owned_cell_rows(mesh, nodes):
+    """The cells with vtkGhostType 0, as sorted rows of their points' coordinates and material."""
+    if mesh.GetNumberOfCells() == 0:
+        return np.zeros((0, 3 * nodes + 1))
+    coordinates = points(mesh)
+    if mesh.IsA("vtkPolyData"):  # InterfaceSurface's facets
+        cellsOf = mesh.GetPolys() if nodes == 3 else mesh.GetLines()
+        conn = vtk_to_numpy(cellsOf.GetConnectivityArray()).reshape(-1, nodes)
+    else:
+        conn = connectivity(mesh, nodes)
+    ghosts = mesh.GetCellData().GetArray(vtkDataSetAttributes.GhostArrayName())
+    own = np.ones(len(conn), dtype=bool) if ghosts is None else vtk_to_numpy(ghosts) == 0
+    if not own.any():
+        return np.zeros((0, 3 * nodes + 1))
+    corners = coordinates[conn[own]]  # (m, nodes, 3)
+    order = np.lexsort((corners[:, :, 2], corners[:, :, 1], corners[:, :, 0]), axis=1)
+    corners = np.take_along_axis(corners, order[:, :, None], axis=1).reshape(len(corners), -1)
+    label = "BoundaryLabels" if mesh.GetCellData().GetArray("BoundaryLabels") else (
+        "OriginalMaterial" if mesh.IsA("vtkPolyData") else "Material")
+    columns = [corners, cell_array(mesh, label)[own]]
+    if mesh.GetCellData().GetArray("RootColour") is not None:
+        columns.append(cell_array(mesh, "RootColour")[own])
+    rows = np.column_stack(columns)
+    return rows[np.lexsort(rows.T[::-1])]

@@ -173,6 +173,24 @@ enum class SmoothingMethod
   Laplacian = 1
 };
 
+/// The exchanges of a piece of a distributed mesh with the other pieces while the pieces smooth,
+/// so that the steps move every point as the whole mesh's do (BoundarySmoothOptions::Exchange).
+/// Every call is collective: all pieces make the same calls in the same order.
+class SmoothingExchange
+{
+public:
+  virtual ~SmoothingExchange() = default;
+  /// Whether every piece is `ready`; the first call.
+  virtual bool AllReady(bool ready) = 0;
+  /// Gives the points this piece does not move (HeldPoints) the values of the piece that moves
+  /// them: `width` doubles per point in `values`; with `colour` >= 0 only the points of that
+  /// root colour (the colour of the block its piece moves a point in), else all. Appends the
+  /// points whose values changed to `changed` when not null.
+  virtual void Share(double* values, int width, int colour, std::vector<std::int64_t>* changed) = 0;
+  /// The largest `value` of all pieces.
+  virtual double Maximum(double value) = 0;
+};
+
 struct BoundarySmoothOptions
 {
   SmoothingMethod Method = SmoothingMethod::Taubin;
@@ -229,6 +247,14 @@ struct BoundarySmoothOptions
   /// 3^Dim; nullptr: blocks of consecutive ids), by which the moves are ordered alike in a whole
   /// mesh and in its pieces (header comment).
   const std::uint8_t* CellRootColours = nullptr;
+  /// A piece of a distributed mesh (nullptr: none): the points another piece moves are
+  /// HeldPoints, and the steps of the iterations move this piece's points as the whole mesh's
+  /// are moved, given CellRootColours: the roles and the steps' targets and positions of the
+  /// held points come from the pieces that move them, and the bounds from all pieces' cells
+  /// (header comment). The volume restoration and the quality improvement that follow are not
+  /// exchanged: they hold HeldPointsAfterSteps too.
+  SmoothingExchange* Exchange = nullptr;
+  const std::uint8_t* HeldPointsAfterSteps = nullptr;
 };
 
 struct BoundarySmoothStats
@@ -498,7 +524,16 @@ private:
   int FreeDirections(const IdType* connectivity, const MaterialType* materials, std::int64_t p,
     bool offInterface, double (&directions)[Dim][Dim]) const;
 
-  Status Validate(double* points, std::int64_t numberOfPoints, std::int64_t numberOfCells,
+  template <class IdType>
+  Status CheckInput(const double* points, std::int64_t numberOfPoints, const IdType* connectivity,
+    std::int64_t numberOfCells, const BoundarySmoothOptions& options) const;
+  /// With an exchange: the held points' roles from the pieces that move them.
+  void ShareRoles();
+  /// With an exchange: the shapes of the cells around points whose positions another piece
+  /// changed.
+  template <class IdType>
+  void MeasureAround(const IdType* connectivity, const std::vector<std::int64_t>& changed);
+  Status Validate(const double* points, std::int64_t numberOfPoints, std::int64_t numberOfCells,
     const BoundarySmoothOptions& options) const;
 
   BoundarySmoothStats Stats;
@@ -528,6 +563,8 @@ private:
   UninitializedVector<Shape> Shapes;        // per cell, together: a move reads and writes both
   UninitializedVector<double> Determinants; // only while a measure sums the volumes
   double ConditionBound = 0.0;
+  // Whether Step exchanges with the other pieces (Options.Exchange, during the iterations).
+  bool Exchanging = false;
   double CosineBound = 1.0;
   double OptionCosine = 1.0; // the cosine of MinDihedralAngle
   std::atomic<std::int64_t> Accepted{ 0 };
@@ -729,7 +766,7 @@ void BoundarySmoother<Dim>::ConstrainJunctions(const IdType* connectivity,
 }
 
 template <int Dim>
-Status BoundarySmoother<Dim>::Validate(double* points, std::int64_t numberOfPoints,
+Status BoundarySmoother<Dim>::Validate(const double* points, std::int64_t numberOfPoints,
   std::int64_t numberOfCells, const BoundarySmoothOptions& options) const
 {
   if (numberOfPoints < 0 || numberOfCells < 0 || (numberOfPoints > 0 && !points))
@@ -793,6 +830,61 @@ Status BoundarySmoother<Dim>::Validate(double* points, std::int64_t numberOfPoin
   if (!(options.VolumeTolerance >= 0.0))
   {
     return Status::Invalid("the volume tolerance must be >= 0");
+  }
+  return Status::Ok();
+}
+
+template <int Dim>
+template <class IdType>
+Status BoundarySmoother<Dim>::CheckInput(const double* points, std::int64_t numberOfPoints,
+  const IdType* connectivity, std::int64_t numberOfCells,
+  const BoundarySmoothOptions& options) const
+{
+  Status status = this->Validate(points, numberOfPoints, numberOfCells, options);
+  if (!status.IsOk())
+  {
+    return status;
+  }
+  if (numberOfCells > 0 && !connectivity)
+  {
+    return Status::Invalid("no connectivity");
+  }
+  constexpr std::int64_t Corners = Dim + 1;
+  for (std::int64_t i = 0; i < numberOfCells * Corners; ++i)
+  {
+    const auto id = static_cast<std::int64_t>(connectivity[i]);
+    if (id < 0 || id >= numberOfPoints)
+    {
+      return Status::Invalid(
+        "cell " + std::to_string(i / Corners) + " has an invalid point id " + std::to_string(id));
+    }
+  }
+  if (options.CellRootColours)
+  {
+    int colours = 1;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      colours *= 3;
+    }
+    for (std::int64_t c = 0; c < numberOfCells; ++c)
+    {
+      if (options.CellRootColours[c] >= colours)
+      {
+        return Status::Invalid("cell " + std::to_string(c) + " has root colour " +
+          std::to_string(options.CellRootColours[c]) + ", not below 3^" + std::to_string(Dim));
+      }
+    }
+  }
+  if (options.Exchange && !(options.CellRootColours && options.HeldPoints))
+  {
+    return Status::Invalid("an exchange between pieces needs root colours and held points");
+  }
+  for (std::int64_t i = 0; i < numberOfPoints * Dim; ++i)
+  {
+    if (!std::isfinite(points[i]))
+    {
+      return Status::Invalid("point " + std::to_string(i / Dim) + " has a non-finite coordinate");
+    }
   }
   return Status::Ok();
 }
@@ -983,14 +1075,14 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   const BoundarySmoothOptions& options, Projector&& projector, Executor& executor)
 {
   this->Stats = BoundarySmoothStats();
-  Status status = this->Validate(points, numberOfPoints, numberOfCells, options);
+  Status status = this->CheckInput(points, numberOfPoints, connectivity, numberOfCells, options);
+  if (options.Exchange && !options.Exchange->AllReady(status.IsOk()) && status.IsOk())
+  {
+    status = Status::Invalid("the smoothing of another piece failed");
+  }
   if (!status.IsOk())
   {
     return status;
-  }
-  if (numberOfCells > 0 && !connectivity)
-  {
-    return Status::Invalid("no connectivity");
   }
   this->Options = options;
   this->Points = points;
@@ -1002,39 +1094,6 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   const std::int64_t cells = numberOfCells;
   constexpr std::int64_t Corners = Dim + 1;
 
-  // Ids and coordinates.
-  for (std::int64_t i = 0; i < cells * Corners; ++i)
-  {
-    const auto id = static_cast<std::int64_t>(connectivity[i]);
-    if (id < 0 || id >= numberOfPoints)
-    {
-      return Status::Invalid(
-        "cell " + std::to_string(i / Corners) + " has an invalid point id " + std::to_string(id));
-    }
-  }
-  if (options.CellRootColours)
-  {
-    int colours = 1;
-    for (int axis = 0; axis < Dim; ++axis)
-    {
-      colours *= 3;
-    }
-    for (std::int64_t c = 0; c < cells; ++c)
-    {
-      if (options.CellRootColours[c] >= colours)
-      {
-        return Status::Invalid("cell " + std::to_string(c) + " has root colour " +
-          std::to_string(options.CellRootColours[c]) + ", not below 3^" + std::to_string(Dim));
-      }
-    }
-  }
-  for (std::int64_t i = 0; i < numberOfPoints * Dim; ++i)
-  {
-    if (!std::isfinite(points[i]))
-    {
-      return Status::Invalid("point " + std::to_string(i / Dim) + " has a non-finite coordinate");
-    }
-  }
   const std::int64_t background = options.BackgroundMaterial;
   auto isBackground = [&](std::int64_t cell)
   { return materials && static_cast<std::int64_t>(materials[cell]) == background; };
@@ -1114,8 +1173,15 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   {
     return Status::Aborted();
   }
-  const double largestCosineBefore = summarize(
+  double largestCosineBefore = summarize(
     this->Stats.WorstConditionBefore, this->Stats.MinDihedralBefore, this->Stats.VolumeBefore);
+  if (options.Exchange)
+  {
+    // The bounds of the whole mesh (its own cells' volumes stay the piece's).
+    this->Stats.WorstConditionBefore = options.Exchange->Maximum(this->Stats.WorstConditionBefore);
+    largestCosineBefore = options.Exchange->Maximum(largestCosineBefore);
+    this->Stats.MinDihedralBefore = Dim == 1 ? 180.0 : DihedralDegrees(largestCosineBefore);
+  }
   if (!options.TargetVolumes.empty() && materials)
   {
     this->Stats.TargetVolumes = options.TargetVolumes;
@@ -1315,7 +1381,12 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   }
   this->ConstrainJunctions(connectivity, materials, surfaceMasks, executor);
   std::vector<std::uint8_t>().swap(surfaceMasks);
-  if (options.HeldPoints)
+  if (options.Exchange)
+  {
+    // A held point's role is its mover's, which has all its cells.
+    this->ShareRoles();
+  }
+  else if (options.HeldPoints)
   {
     // After the junctions, which may read any surface point, and before the interior layers,
     // which then stop at held points.
@@ -1375,8 +1446,18 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
       }
     };
     std::vector<std::vector<std::int64_t>> candidates;
-    for (int layer = 0; layer < options.NumberOfInteriorLayers && !frontier.empty(); ++layer)
+    std::vector<std::uint8_t> wasOther;
+    for (int layer = 0;
+         layer < options.NumberOfInteriorLayers && (options.Exchange || !frontier.empty()); ++layer)
     {
+      if (options.Exchange)
+      {
+        wasOther.resize(static_cast<std::size_t>(numberOfPoints));
+        for (std::int64_t p = 0; p < numberOfPoints; ++p)
+        {
+          wasOther[p] = this->Roles[p] == Other;
+        }
+      }
       const std::int64_t chunks =
         (static_cast<std::int64_t>(frontier.size()) + LayerChunk - 1) / LayerChunk;
       if (static_cast<std::int64_t>(candidates.size()) < chunks)
@@ -1394,6 +1475,20 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
           {
             this->Roles[id] = InteriorLayer;
             next.push_back(id);
+          }
+        }
+      }
+      if (options.Exchange)
+      {
+        // A held point may be in the layer through cells this piece does not have: the next
+        // frontier is every point the layer took, by the roles of the points' movers.
+        this->ShareRoles();
+        next.clear();
+        for (std::int64_t p = 0; p < numberOfPoints; ++p)
+        {
+          if (wasOther[p] && this->Roles[p] == InteriorLayer)
+          {
+            next.push_back(p);
           }
         }
       }
@@ -1490,7 +1585,8 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     {
       const std::uint8_t role = this->Roles[p];
       this->Stats.FixedPoints += role == Fixed;
-      if (role == Surface || role == InteriorLayer)
+      if ((role == Surface || role == InteriorLayer) &&
+        !(options.Exchange && options.HeldPoints[p]))
       {
         (role == Surface ? surfacePoints : interiorPoints).push_back(p);
       }
@@ -1540,6 +1636,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   const double lambda = options.RelaxationFactor;
   const double mu = TaubinMu(lambda, options.PassBand);
   constexpr bool project = !std::is_same<std::decay_t<Projector>, NoProjection>::value;
+  this->Exchanging = options.Exchange != nullptr;
   for (int iteration = 0; iteration < options.NumberOfIterations; ++iteration)
   {
     const bool taubin = options.Method == SmoothingMethod::Taubin;
@@ -1548,7 +1645,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     const bool relax = (iteration + 1) % options.InteriorRelaxationInterval == 0 ||
       iteration + 1 == options.NumberOfIterations;
     if (status.IsOk() && options.NumberOfInteriorLayers > 0 && relax &&
-      !interiorBlocks.Points.empty())
+      (options.Exchange || !interiorBlocks.Points.empty()))
     {
       status =
         this->Step(interiorBlocks, false, lambda, 0.0, connectivity, projector, false, executor);
@@ -1559,6 +1656,19 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
       return status;
     }
     executor.ReportProgress(0.1 + 0.8 * (iteration + 1) / options.NumberOfIterations);
+  }
+  this->Exchanging = false;
+  if (options.Exchange)
+  {
+    // What follows is not exchanged: it holds the points other pieces have.
+    for (std::int64_t p = 0; p < numberOfPoints; ++p)
+    {
+      if (options.HeldPoints[p] ||
+        (options.HeldPointsAfterSteps && options.HeldPointsAfterSteps[p]))
+      {
+        this->Roles[p] = Fixed;
+      }
+    }
   }
   if (!this->Stats.TargetVolumes.empty())
   {
@@ -1684,6 +1794,39 @@ void BoundarySmoother<Dim>::MakeBlocks(const IdType* connectivity, std::vector<s
 }
 
 template <int Dim>
+void BoundarySmoother<Dim>::ShareRoles()
+{
+  std::vector<double> roles(this->Roles.begin(), this->Roles.end());
+  this->Options.Exchange->Share(roles.data(), 1, -1, nullptr);
+  for (std::int64_t p = 0; p < this->NumberOfPoints; ++p)
+  {
+    if (this->Options.HeldPoints[p])
+    {
+      this->Roles[p] = static_cast<std::uint8_t>(roles[p]);
+    }
+  }
+}
+
+template <int Dim>
+template <class IdType>
+void BoundarySmoother<Dim>::MeasureAround(
+  const IdType* connectivity, const std::vector<std::int64_t>& changed)
+{
+  constexpr std::int64_t Corners = Dim + 1;
+  // Measured in full: a cached slack assumed the old corners. The moves decide by the measure
+  // wherever a slack does not suffice, so a full measure decides as the whole mesh's cache does.
+  for (const std::int64_t p : changed)
+  {
+    for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
+    {
+      const std::int64_t cell = this->Incidence.Cells[k];
+      this->Shapes[cell] =
+        this->MeasureCell(connectivity + cell * Corners, cell, -1, nullptr, nullptr);
+    }
+  }
+}
+
+template <int Dim>
 template <class IdType, class Executor>
 void BoundarySmoother<Dim>::MakeRootBlocks(const IdType* connectivity,
   std::vector<std::int64_t> points, PointBlocks& blocks, Executor& executor) const
@@ -1737,15 +1880,24 @@ void BoundarySmoother<Dim>::MakeRootBlocks(const IdType* connectivity,
     const std::int32_t* Positions;
     const std::uint8_t* Colours;
     std::atomic<std::int32_t>* Parents;
+    // With path halving: a point's parent becomes its grandparent, still an ancestor whatever
+    // the other threads do (only roots are linked, each under a smaller one).
     std::int32_t Find(std::int32_t i) const
     {
-      std::int32_t parent = this->Parents[i].load(std::memory_order_relaxed);
-      while (parent != i)
+      for (;;)
       {
-        i = parent;
-        parent = this->Parents[i].load(std::memory_order_relaxed);
+        const std::int32_t parent = this->Parents[i].load(std::memory_order_relaxed);
+        if (parent == i)
+        {
+          return i;
+        }
+        const std::int32_t grandparent = this->Parents[parent].load(std::memory_order_relaxed);
+        if (grandparent != parent)
+        {
+          this->Parents[i].store(grandparent, std::memory_order_relaxed);
+        }
+        i = grandparent;
       }
-      return i;
     }
     void Join(std::int32_t a, std::int32_t b) const
     {
@@ -1768,29 +1920,41 @@ void BoundarySmoother<Dim>::MakeRootBlocks(const IdType* connectivity,
         }
       }
     }
+    // Per cell, its corners of one colour (a pass over the cells rather than over each point's
+    // cells: a quarter of the visits).
     void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
     {
-      const BoundarySmoother& self = *this->Self;
-      for (std::int64_t i = begin; i < end; ++i)
+      for (std::int64_t c = begin; c < end; ++c)
       {
-        const std::int64_t p = (*this->Points)[i];
-        for (std::int64_t k = self.Incidence.Offsets[p]; k < self.Incidence.Offsets[p + 1]; ++k)
+        const IdType* ids = this->Connectivity + c * Corners;
+        std::int32_t corners[Dim + 1];
+        int count = 0;
+        for (int v = 0; v <= Dim; ++v)
         {
-          const IdType* ids = this->Connectivity + self.Incidence.Cells[k] * Corners;
-          for (int v = 0; v <= Dim; ++v)
+          const std::int32_t j = this->Positions[static_cast<std::int64_t>(ids[v])];
+          if (j < 0)
           {
-            const std::int32_t j = this->Positions[static_cast<std::int64_t>(ids[v])];
-            if (j >= 0 && j < i && this->Colours[j] == this->Colours[i])
-            {
-              this->Join(static_cast<std::int32_t>(i), j);
-            }
+            continue;
+          }
+          int same = 0;
+          while (same < count && this->Colours[corners[same]] != this->Colours[j])
+          {
+            ++same;
+          }
+          if (same < count)
+          {
+            this->Join(corners[same], j);
+          }
+          else
+          {
+            corners[count++] = j;
           }
         }
       }
     }
   };
   JoinKernel join{ this, connectivity, &points, positions.data(), colours.data(), parents.data() };
-  executor.For(0, count, 4096, join);
+  executor.For(0, this->NumberOfCells, 8192, join);
   // Blocks in the order of their first points, each block's points in ascending order.
   std::vector<std::int32_t> blockOf(points.size());
   std::int64_t numberOfBlocks = 0;
@@ -2099,6 +2263,11 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
   }
   const double* finalTargets = this->Targets.data();
   const bool composedTargets = mu != 0.0 && !given;
+  if (composedTargets && this->Exchanging)
+  {
+    // The mu step reads the lambda targets of the neighbours, also of those other pieces move.
+    this->Options.Exchange->Share(this->Targets.data(), Dim, -1, nullptr);
+  }
   if (composedTargets)
   {
     this->Composed.resize(all.size() * Dim); // once: the surface steps have the same points
@@ -2116,6 +2285,14 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
     MoveKernel move{ this, &blocks, &colour, connectivity, &projector, project && surface,
       finalTargets, composedTargets, &executor };
     executor.For(0, static_cast<std::int64_t>(colour.size()), 1, move);
+    if (this->Exchanging)
+    {
+      // The points other pieces moved in this colour, before the next colour's moves read them.
+      std::vector<std::int64_t> changed;
+      this->Options.Exchange->Share(
+        this->Points, Dim, static_cast<int>(&colour - blocks.ByColour.data()), &changed);
+      this->MeasureAround(connectivity, changed);
+    }
   }
   // Back to "the target of a point outside a step is its position" for the next step (in
   // parallel: the points of a step are scattered, and this loop was most of a step's serial
@@ -2137,6 +2314,17 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
   };
   ResetKernel reset{ this, &all };
   executor.For(0, static_cast<std::int64_t>(all.size()), 1 << 14, reset);
+  if (this->Exchanging && composedTargets)
+  {
+    for (std::int64_t p = 0; p < this->NumberOfPoints; ++p)
+    {
+      if (this->Options.HeldPoints[p])
+      {
+        std::copy(
+          this->Points + p * Dim, this->Points + (p + 1) * Dim, this->Targets.data() + p * Dim);
+      }
+    }
+  }
   return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
 }
 
@@ -2934,7 +3122,8 @@ Status BoundarySmoother<Dim>::RestoreVolumes(const PointBlocks& surfaceBlocks,
     // The targets of the moves, validated like the smoothing's.
     for (std::int64_t i = 0; i < count; ++i)
     {
-      if (first[i] == Outside)
+      // (A piece's points that other pieces have are fixed after the exchanged steps.)
+      if (first[i] == Outside || this->Roles[points[i]] == Fixed)
       {
         continue;
       }
