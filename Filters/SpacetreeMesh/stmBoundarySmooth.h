@@ -46,11 +46,17 @@
  * layers stop at held points), the one ring that the cuts keep by default.
  *
  * When every rank of an MPI run asks for its own piece (piece k of n on rank k of n, as
- * pvbatch's UpdatePiece and `mpiexec stmesh` do), the ranks then improve the cells beyond the
- * quality bounds at the points their pieces share, together: each updates its ghost cells to
- * the neighbours' smoothed points, and in rank order each improves such cells, moving the shared
- * points too, and sends what it moved (stmPieceBorder.h). The shared points stay equal bit for
- * bit. Every rank must then execute the filter, as for VTK's other parallel filters.
+ * pvbatch's UpdatePiece and `mpiexec stmesh` do) and the cells carry the tessellation's
+ * "RootColour", the ranks exchange what the iterations need (stmPieceExchange.h): each point is
+ * moved by the piece that owns the root cell of its block, and the others receive its role, its
+ * Taubin targets and its positions after every colour, so the iterations move every point as in
+ * the whole mesh, bit for bit. The volume restoration and the quality improvement that follow
+ * are not exchanged yet: they hold the points of the ghost cells. The ranks then improve the
+ * cells beyond the quality bounds at the points their pieces share, together: each updates its
+ * ghost cells to the neighbours' smoothed points, and in rank order each improves such cells,
+ * moving the shared points too, and sends what it moved (stmPieceBorder.h). The shared points
+ * stay equal bit for bit. Every rank must then execute the filter, as for VTK's other parallel
+ * filters. The filter removes "RootColour" from its output.
  *
  * @sa stmMarchingSimplices stmSeparatingFunction
  */
