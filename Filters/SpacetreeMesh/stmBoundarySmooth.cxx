@@ -66,9 +66,8 @@ struct SmoothRequest
   bool BorderPassTaken = false;
   stmPieceBorder::Stats Border;
   // Whether this rank has taken its part in the agreement on exchanging during the steps
-  // (stmPieceExchange), and whether the ranks exchanged.
+  // (stmPieceExchange).
   bool ExchangeAgreed = false;
-  bool Exchanged = false;
 };
 
 /// This rank's part in stmPieceBorder's pass when it has no piece to smooth (`ready`: an empty
@@ -366,7 +365,6 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
       request.Options.Exchange = exchange.get();
       request.Options.HeldPoints = movers.Held.data();
       request.Options.HeldPointsAfterSteps = held.data();
-      request.Exchanged = true;
       vtkDebugWithObjectMacro(request.Filter,
         "exchanging " << exchange->GetNumberOfSentPoints() << " points; "
                       << exchange->GetNumberOfUnmatchedPoints() << " held points unmatched");

@@ -478,6 +478,8 @@ private:
     std::vector<std::vector<std::int64_t>> ByColour; // the blocks of each colour
   };
   static constexpr std::int64_t BlockSize = 256;
+  /// Root colours (CellRootColours): 3^Dim, as stm::RootColouring counts them.
+  static constexpr int NumberOfRootColours = Dim == 1 ? 3 : Dim == 2 ? 9 : Dim == 3 ? 27 : 81;
 
   template <class IdType, class Executor>
   void MakeBlocks(const IdType* connectivity, std::vector<std::int64_t> points, PointBlocks& blocks,
@@ -861,14 +863,9 @@ Status BoundarySmoother<Dim>::CheckInput(const double* points, std::int64_t numb
   }
   if (options.CellRootColours)
   {
-    int colours = 1;
-    for (int axis = 0; axis < Dim; ++axis)
-    {
-      colours *= 3;
-    }
     for (std::int64_t c = 0; c < numberOfCells; ++c)
     {
-      if (options.CellRootColours[c] >= colours)
+      if (options.CellRootColours[c] >= NumberOfRootColours)
       {
         return Status::Invalid("cell " + std::to_string(c) + " has root colour " +
           std::to_string(options.CellRootColours[c]) + ", not below 3^" + std::to_string(Dim));
@@ -1832,11 +1829,6 @@ void BoundarySmoother<Dim>::MakeRootBlocks(const IdType* connectivity,
   std::vector<std::int64_t> points, PointBlocks& blocks, Executor& executor) const
 {
   constexpr std::int64_t Corners = Dim + 1;
-  int numberOfColours = 1;
-  for (int axis = 0; axis < Dim; ++axis)
-  {
-    numberOfColours *= 3;
-  }
   const auto count = static_cast<std::int64_t>(points.size());
   // Each point's colour (the smallest of its cells'), and its position among `points`.
   std::vector<std::int32_t> positions(static_cast<std::size_t>(this->NumberOfPoints), -1);
@@ -1968,7 +1960,7 @@ void BoundarySmoother<Dim>::MakeRootBlocks(const IdType* connectivity,
   {
     ++blocks.Offsets[blockOf[i] + 1];
   }
-  blocks.ByColour.assign(static_cast<std::size_t>(numberOfColours), {});
+  blocks.ByColour.assign(static_cast<std::size_t>(NumberOfRootColours), {});
   for (std::int64_t b = 0; b < numberOfBlocks; ++b)
   {
     blocks.Offsets[b + 1] += blocks.Offsets[b];
