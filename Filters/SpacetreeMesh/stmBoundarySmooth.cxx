@@ -352,10 +352,22 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
   if (request.Controller)
   {
     request.ExchangeAgreed = true;
+    // The cut's volume targets are exchanged by their exact parts.
+    vtkDataArray* volumeParts = input->GetFieldData()->GetArray(stmPieces::VolumePartsName);
+    volumeParts = volumeParts && volumeParts->GetNumberOfComponents() == 2 ? volumeParts : nullptr;
     const bool can = !held.empty() && request.Options.CellRootColours &&
-      request.Coordinates.CopiesCoordinates() && Dim >= 2;
+      request.Coordinates.CopiesCoordinates() && Dim >= 2 &&
+      (request.Options.TargetVolumes.empty() || volumeParts);
     if (stmPieceExchange::AllAgree(request.Controller, can))
     {
+      // Every part of the smoothing then moves the shared points as the whole mesh's does: no
+      // rank takes the pass over them (stmPieceBorder), not even one whose smoothing fails.
+      request.BorderPassTaken = true;
+      if (!request.Options.TargetVolumes.empty())
+      {
+        request.Options.TargetVolumes =
+          stmPieceExchange::SumVolumeParts(request.Controller, volumeParts);
+      }
       movers = stmPieceExchange::FindMovers<Dim>(connectivity, cells, points,
         stmPieces::GhostCellFlags(input), request.Options.CellRootColours);
       exchange = std::make_unique<stmPieceExchange::Exchange>(
@@ -364,7 +376,7 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
         [inputPoints](std::int64_t p, double* key) { inputPoints->GetPoint(p, key); });
       request.Options.Exchange = exchange.get();
       request.Options.HeldPoints = movers.Held.data();
-      request.Options.HeldPointsAfterSteps = held.data();
+      request.Options.GhostPoints = held.data();
       vtkDebugWithObjectMacro(request.Filter,
         "exchanging " << exchange->GetNumberOfSentPoints() << " points; "
                       << exchange->GetNumberOfUnmatchedPoints() << " held points unmatched");
@@ -440,15 +452,15 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
       return status;
     }
     request.Stats = smoother.GetStats();
-    if (request.Controller)
+    if (request.Controller && !exchange)
     {
       roles = smoother.GetPointRoles();
     }
   }
   request.Options.Exchange = nullptr;
   request.Options.HeldPoints = held.empty() ? nullptr : held.data();
-  request.Options.HeldPointsAfterSteps = nullptr;
-  if (request.Controller)
+  request.Options.GhostPoints = nullptr;
+  if (request.Controller && !exchange)
   {
     // The points the pieces share, and the cells at them (stmPieceBorder), now that every
     // piece has smoothed its own points.
@@ -481,6 +493,7 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
   vtkUnstructuredGrid* output = request.Output;
   output->ShallowCopy(input);
   output->GetCellData()->RemoveArray(stmPieces::RootColourName);
+  output->GetFieldData()->RemoveArray(stmPieces::VolumePartsName);
   vtkNew<vtkPoints> moved;
   moved->SetDataType(inputPoints->GetDataType());
   moved->DeepCopy(inputPoints);

@@ -50,8 +50,12 @@
  * "RootColour", the ranks exchange what the iterations need (stmPieceExchange.h): each point is
  * moved by the piece that owns the root cell of its block, and the others receive its role, its
  * Taubin targets and its positions after every colour, so the iterations move every point as in
- * the whole mesh, bit for bit. The volume restoration and the quality improvement that follow
- * are not exchanged yet: they hold the points of the ghost cells. The ranks then improve the
+ * the whole mesh, bit for bit. So do the small parts (their sizes summed over all pieces), the
+ * volume restoration (the ranks sum the volumes per material and the weights of its system
+ * exactly over all pieces: stm::ExactSum; the targets from stmMultiMaterialCut's
+ * "OriginalMaterialVolumeParts", which the filter removes from its output) and the quality
+ * improvement (its candidates move in root blocks). The interior edge splits are not exchanged
+ * yet: they hold the points of the ghost cells. The ranks then improve the
  * cells beyond the quality bounds at the points their pieces share, together: each updates its
  * ghost cells to the neighbours' smoothed points, and in rank order each improves such cells,
  * moving the shared points too, and sends what it moved (stmPieceBorder.h). The shared points

@@ -129,8 +129,8 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
   // RestoreOriginalVolumes gives back to each material. A piece's own cells only: the smoothing
   // sums its volumes without the ghost cells, which it does not move and of which the cut keeps
   // only a ring.
-  const std::vector<double> inputVolumes = stm::VolumePerMaterial<Dim>(core.data(), connectivity,
-    numberOfCells, materials.data(), count, stmPieces::GhostCellFlags(input));
+  const std::vector<stm::ExactSum> inputVolumes = stm::VolumePerMaterial<Dim>(core.data(),
+    connectivity, numberOfCells, materials.data(), count, stmPieces::GhostCellFlags(input));
   stm::MultiMaterialCut<Dim> cut;
   status = cut.Run(numberOfPoints, options.SnapVertices ? core.data() : nullptr, connectivity,
     numberOfCells, materials.data(), count, std::move(fractions), options, executor);
@@ -224,12 +224,30 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
   volumes->SetComponentName(1, "Volume");
   for (int m = 0; m < count; ++m)
   {
-    if (inputVolumes[m] > 0.0)
+    if (inputVolumes[m].Value() > 0.0)
     {
-      volumes->InsertNextTuple2(static_cast<double>(order[m]), inputVolumes[m]);
+      volumes->InsertNextTuple2(static_cast<double>(order[m]), inputVolumes[m].Value());
     }
   }
   output->GetFieldData()->AddArray(volumes);
+  if (stmPieces::GhostCellFlags(input))
+  {
+    // A piece's own volumes as exact parts, which the pieces' smoothing adds up to the whole
+    // mesh's volumes (the rounded sums of pieces are not the whole mesh's rounded sum).
+    vtkNew<vtkDoubleArray> parts;
+    parts->SetName(stmPieces::VolumePartsName);
+    parts->SetNumberOfComponents(2);
+    parts->SetComponentName(0, "Material");
+    parts->SetComponentName(1, "VolumePart");
+    for (int m = 0; m < count; ++m)
+    {
+      for (const double part : inputVolumes[m].Parts())
+      {
+        parts->InsertNextTuple2(static_cast<double>(order[m]), part);
+      }
+    }
+    output->GetFieldData()->AddArray(parts);
+  }
   vtkNew<vtkIntArray> material;
   material->SetName("Material");
   material->SetNumberOfValues(cells);

@@ -338,7 +338,7 @@ stm::Status ImproveSharedPoints(vtkMultiProcessController* controller, bool read
         turnOptions.GhostCells = nullptr;
         turnOptions.CellRootColours = nullptr; // the whole piece's cells, not the submesh's
         turnOptions.Exchange = nullptr;
-        turnOptions.HeldPointsAfterSteps = nullptr;
+        turnOptions.GhostPoints = nullptr;
         const std::int64_t* materials = piece.Materials ? subMaterials.data() : nullptr;
         const auto subCells = static_cast<std::int64_t>(subConnectivity.size() / Corners);
         stm::BoundarySmoother<Dim> smoother;

@@ -28,11 +28,13 @@
 #include "Smooth/BoundarySmooth.h"
 
 #include "vtkCommunicator.h"
+#include "vtkDataArray.h"
 #include "vtkMultiProcessController.h"
 
 #include <algorithm>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <unordered_map>
 #include <vector>
 
@@ -84,6 +86,33 @@ Movers FindMovers(const IdType* connectivity, std::int64_t cells, std::int64_t p
     }
   }
   return movers;
+}
+
+/// The whole mesh's volume per material from every piece's exact parts (rows of material and
+/// part, stmPieces::VolumePartsName), as the whole mesh's own cells would sum them (collective).
+inline std::map<std::int64_t, double> SumVolumeParts(
+  vtkMultiProcessController* controller, vtkDataArray* parts)
+{
+  std::vector<double> rows(static_cast<std::size_t>(parts->GetNumberOfTuples()) * 2);
+  for (vtkIdType t = 0; t < parts->GetNumberOfTuples(); ++t)
+  {
+    parts->GetTuple(t, rows.data() + 2 * t);
+  }
+  const std::vector<double> all = stmPieceBorder::detail::AllGather(controller, rows);
+  std::map<std::int64_t, stm::ExactSum> sums;
+  for (std::size_t at = 0; at + 2 <= all.size(); at += 2)
+  {
+    sums[static_cast<std::int64_t>(all[at])].Add(all[at + 1]);
+  }
+  std::map<std::int64_t, double> volumes;
+  for (const auto& entry : sums)
+  {
+    if (entry.second.Value() > 0.0) // as stmMultiMaterialCut lists a material
+    {
+      volumes.emplace(entry.first, entry.second.Value());
+    }
+  }
+  return volumes;
 }
 
 /// stm::SmoothingExchange between the pieces on the ranks of a controller (the file's comment).
@@ -209,6 +238,11 @@ public:
     double all = value;
     this->Controller->AllReduce(&value, &all, 1, vtkCommunicator::MAX_OP);
     return all;
+  }
+
+  std::vector<double> Gather(const std::vector<double>& values) override
+  {
+    return stmPieceBorder::detail::AllGather(this->Controller, values);
   }
 
   void Share(double* values, int width, int colour, std::vector<std::int64_t>* changed) override

@@ -102,6 +102,11 @@ constexpr const char* PieceMarkerName = "SpacetreeMeshPiece";
 /// whole mesh and in every piece of it. The smoothing removes it from its output.
 constexpr const char* RootColourName = "RootColour";
 
+/// Field array of a piece of stmMultiMaterialCut's output, rows (material, part): the piece's
+/// OriginalMaterialVolumes as exact parts (stm::ExactSum::Parts), which the pieces' smoothing
+/// adds up to the whole mesh's volumes bit for bit. The smoothing removes it from its output.
+constexpr const char* VolumePartsName = "OriginalMaterialVolumeParts";
+
 /// The number of pieces a request asks for (1 when it names none).
 inline int RequestedNumberOfPieces(vtkInformation* info)
 {

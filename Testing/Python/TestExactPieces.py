@@ -1,11 +1,13 @@
-"""The smoothing's steps under MPI move every point as the whole mesh's do (stmBoundarySmooth
-with Split Into Pieces, every rank asking for its own piece: `mpiexec -n P pvbatch --symmetric`).
+"""The smoothing under MPI moves every point as the whole mesh's does (stmBoundarySmooth with
+Split Into Pieces, every rank asking for its own piece: `mpiexec -n P pvbatch --symmetric`).
 Each point is moved by the piece that owns the root cell of its block, and the pieces exchange
 the roles, the Taubin targets and, after every colour of root cells, the positions of the points
-they share. With the parts that are not exchanged yet turned off (the volume restoration, the
-quality improvement, the small parts and the edge splits) the owned cells of the P pieces are
-the serial mesh's cells bit for bit: 3D nested ellipsoids with a one-voxel layer to
-MultiMaterialCut, and a 2D image to MarchingSimplices. With every part on, the pieces still
+they share; the volume restoration sums the volumes and its weights exactly over all pieces, and
+the quality improvement moves its candidates in root blocks. With the parts that are not
+exchanged yet turned off (the small parts and the edge splits) the owned cells of the P pieces
+are the serial mesh's cells bit for bit: 3D nested ellipsoids with a one-voxel layer to
+MultiMaterialCut (volume targets from its OriginalMaterialVolumes, and from the cells'
+OriginalMaterial), and a 2D image to MarchingSimplices. With every part on, the pieces still
 conform: as many cells as the serial mesh.
 """
 import os
@@ -14,7 +16,9 @@ import numpy as np
 
 import spacetreemesh
 import stmtesting as T
+from vtkmodules.vtkCommonDataModel import vtkDataObject
 from vtkmodules.vtkCommonExecutionModel import vtkTrivialProducer
+from vtkmodules.vtkFiltersGeneral import vtkPassArrays
 from vtkmodules.vtkParallelCore import vtkMultiProcessController
 
 controller = vtkMultiProcessController.GetGlobalController()
@@ -23,7 +27,9 @@ T.check(ranks > 1, "run under mpiexec with several ranks, not %d" % ranks)
 temp = os.environ.get("STM_TEMP_DIR", ".")
 
 
-def chain(image, cut, exchanged_only):
+def chain(image, cut, exchanged_only, targets="field"):
+    """targets "cells": the volume targets from the cells' OriginalMaterial, and bounds tight
+    enough that the quality improvement moves points."""
     producer = vtkTrivialProducer()
     producer.SetOutput(image)
     tree, balance, tessellate = T.spacetree_chain(producer)
@@ -32,20 +38,26 @@ def chain(image, cut, exchanged_only):
     if cut == "materials":
         tree.SetThinPartRefinement(spacetreemesh.stmImageToSpacetree.THIN_MATERIAL_PARTS)
         T.append_stages(stages, spacetreemesh.stmMultiMaterialCut)
+        if targets == "cells":
+            # Without the cut's field arrays the targets are the volumes per OriginalMaterial.
+            remove = T.append_stages(stages, vtkPassArrays)
+            remove.RemoveArraysOn()
+            remove.AddArray(vtkDataObject.FIELD, "OriginalMaterialVolumes")
+            remove.AddArray(vtkDataObject.FIELD, "OriginalMaterialVolumeParts")
     else:
         T.append_stages(stages, spacetreemesh.stmVertexSnap, spacetreemesh.stmMarchingSimplices)
     smooth = T.append_stages(stages, spacetreemesh.stmBoundarySmooth)
-    smooth.SetSplitInteriorEdges(False)
-    if exchanged_only:
-        smooth.SetNumberOfImprovementSweeps(0)
-        smooth.SetSmallPartPoints(0)
-        smooth.SetRestoreOriginalVolumes(False)
+    smooth.SetSplitInteriorEdges(not exchanged_only)
+    smooth.SetRestoreOriginalVolumes(cut == "materials")
+    if targets == "cells":
+        smooth.SetMaxConditionNumber(2.0)
+        smooth.SetMinDihedralAngle(25.0)
     return stages
 
 
-def check(labels, nodes, cut, exchanged_only, what):
+def check(labels, nodes, cut, exchanged_only, what, targets="field"):
     image = T.make_image(labels)
-    stages = chain(image, cut, exchanged_only)
+    stages = chain(image, cut, exchanged_only, targets)
     errors = [T.ErrorCollector(stage) for stage in stages[1:]]
     T.check(stages[-1].UpdatePiece(rank, ranks, 0) == 1, "%s: rank %d failed" % (what, rank))
     T.check(not any(e.errors for e in errors), "%s: rank %d: %r" % (
@@ -54,9 +66,13 @@ def check(labels, nodes, cut, exchanged_only, what):
     T.check(len(own) > 0, "%s: rank %d owns no cell" % (what, rank))
     path = os.path.join(temp, "exact_%d_%d.npy" % (ranks, rank))
     np.save(path, own)
+    smooth = stages[-1]
+    errors_path = os.path.join(temp, "errors_%d_%d.npy" % (ranks, rank))
+    np.save(errors_path, [smooth.GetLargestVolumeErrorBefore(), smooth.GetLargestVolumeErrorAfter(),
+                          smooth.GetNumberOfImprovedPoints()])
     controller.Barrier()
     if rank == 0:
-        serial = chain(image, cut, exchanged_only)
+        serial = chain(image, cut, exchanged_only, targets)
         serial[-1].Update()
         expected = T.owned_cell_rows(serial[-1].GetOutput(), nodes)
         together = np.concatenate([np.load(os.path.join(temp, "exact_%d_%d.npy" % (ranks, r)))
@@ -65,6 +81,24 @@ def check(labels, nodes, cut, exchanged_only, what):
         T.check(together.shape == expected.shape, "%s, %d ranks: %d owned cells, serial %d" % (
             what, ranks, len(together), len(expected)))
         if exchanged_only:
+            # The restoration's volumes are the whole mesh's in every piece.
+            serial_errors = [serial[-1].GetLargestVolumeErrorBefore(),
+                             serial[-1].GetLargestVolumeErrorAfter()]
+            improved = 0
+            for r in range(ranks):
+                piece = list(np.load(os.path.join(temp, "errors_%d_%d.npy" % (ranks, r))))
+                T.check(piece[:2] == serial_errors, "%s, %d ranks: rank %d's volume errors %r, "
+                        "serial %r" % (what, ranks, r, piece[:2], serial_errors))
+                improved += piece[2]
+            T.check(cut != "materials" or serial_errors[0] > serial_errors[1] > 0.0,
+                    "%s: the restoration did not restore: %r" % (what, serial_errors))
+            # Each improved point counted by the piece that moves it.
+            serial_improved = serial[-1].GetNumberOfImprovedPoints()
+            T.check(improved == serial_improved, "%s, %d ranks: %d points improved, serial %d"
+                    % (what, ranks, improved, serial_improved))
+            T.check(targets != "cells" or serial_improved > 0, "%s: nothing improved" % what)
+            print("%s: volume errors %r, %d points improved, %d kept" % (
+                what, serial_errors, serial_improved, serial[-1].GetNumberOfKeptPoints()))
             differing = np.count_nonzero(np.any(together != expected, axis=1))
             T.check(differing == 0, "%s, %d ranks: %d of %d cells differ from the serial mesh's"
                     % (what, ranks, differing, len(expected)))
@@ -76,6 +110,8 @@ def check(labels, nodes, cut, exchanged_only, what):
 
 three_d = T.nested_ellipsoids((40, 36, 44))
 check(three_d, 4, "materials", True, "3D to MultiMaterialCut, smoothed")
+check(three_d, 4, "materials", True, "3D to MultiMaterialCut, smoothed to the cells' volumes "
+      "and improved to tight bounds", "cells")
 check(three_d, 4, "materials", False, "3D to MultiMaterialCut, smoothed with every part")
 yy, xx = np.mgrid[0:70, 0:64]
 two_d = ((xx - 30.5) ** 2 / 26.0 ** 2 + (yy - 36.0) ** 2 / 30.0 ** 2 < 1.0).astype(np.uint8)

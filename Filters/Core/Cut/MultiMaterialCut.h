@@ -34,6 +34,7 @@
 // side are kept.
 
 #include "../Common/Determinant.h"
+#include "../Common/ExactSum.h"
 #include "../Common/Execution.h"
 #include "../Common/PointCells.h"
 #include "../Common/Status.h"
@@ -379,14 +380,15 @@ struct MultiMaterialCutOptions
   }
 };
 
-/// The volume (area in 2D) of the simplices of each material index (0 to K - 1), in cell order,
-/// leaving out the cells with skipped[c] != 0 (when given: a piece's ghost cells).
+/// The volume (area in 2D) of the simplices of each material index (0 to K - 1), leaving out the
+/// cells with skipped[c] != 0 (when given: a piece's ghost cells). Exact sums: the pieces of a
+/// mesh add up to the whole mesh's volumes exactly (by their parts).
 template <int Dim, class IdType, class MaterialType>
-std::vector<double> VolumePerMaterial(const double* points, const IdType* connectivity,
+std::vector<ExactSum> VolumePerMaterial(const double* points, const IdType* connectivity,
   std::int64_t numberOfCells, const MaterialType* materials, int numberOfMaterials,
   const std::uint8_t* skipped = nullptr)
 {
-  std::vector<double> volumes(static_cast<std::size_t>(numberOfMaterials), 0.0);
+  std::vector<ExactSum> volumes(static_cast<std::size_t>(numberOfMaterials));
   double factorial = 1.0;
   for (int k = 2; k <= Dim; ++k)
   {
@@ -408,8 +410,8 @@ std::vector<double> VolumePerMaterial(const double* points, const IdType* connec
           points[static_cast<std::int64_t>(ids[0]) * Dim + r];
       }
     }
-    volumes[static_cast<std::size_t>(materials[c])] +=
-      std::abs(Determinant<Dim>(edges)) / factorial;
+    volumes[static_cast<std::size_t>(materials[c])].Add(
+      std::abs(Determinant<Dim>(edges)) / factorial);
   }
   return volumes;
 }

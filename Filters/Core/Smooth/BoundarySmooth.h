@@ -126,13 +126,14 @@
 //   search is a compass search over every combination of -1, 0 and 1 times those directions, from a
 //   fifth of the point's longest edge down to 1/256 of its shortest, within 0.6 of the longest edge
 //   per sweep (a needle's short edge must grow by more than its own length). The points of a sweep
-//   are coloured greedily, so the result does not depend on the number of threads. The slivers of a
-//   multi-material cut sit between junction lines where the smoothing's targets do not help (AAL,
-//   116 labels: worst condition number 10.7 -> 5.1, smallest dihedral angle 5.7 -> 11.5 degrees).
-//   With ImprovementMovesInterfaces, when those sweeps end with cells still beyond the bounds,
-//   as many sweeps again let the interface points (between exactly two materials, the outside
-//   counting as one) move in every direction, off their interface: a needle whose corners are
-//   interface points over a short edge cannot widen within the tangent planes, and a move of a
+//   move in the root blocks of CellRootColours (else coloured greedily in point order), so the
+//   result depends neither on the number of threads nor, with root colours, on the numbering. The
+//   slivers of a multi-material cut sit between junction lines where the smoothing's targets do not
+//   help (AAL, 116 labels: worst condition number 10.7 -> 5.1, smallest dihedral angle 5.7 -> 11.5
+//   degrees). With ImprovementMovesInterfaces, when those sweeps end with cells still beyond the
+//   bounds, as many sweeps again let the interface points (between exactly two materials, the
+//   outside counting as one) move in every direction, off their interface: a needle whose corners
+//   are interface points over a short edge cannot widen within the tangent planes, and a move of a
 //   point next to a bad cell changes the volumes by a negligible amount (AAL, 116 labels: worst
 //   condition number 4.76 -> 4.43, smallest dihedral angle 13.7 -> 14.7 degrees; the largest
 //   volume error stays below 0.005%). Junction-line points still move only along their lines
@@ -145,12 +146,14 @@
 #include "Check/SimplexQuality.h"
 #include "Common/CubeInfo.h"
 #include "Common/Determinant.h"
+#include "Common/ExactSum.h"
 #include "Common/Execution.h"
 #include "Common/PointCells.h"
 #include "Common/Status.h"
 #include "Common/UninitializedVector.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -189,6 +192,8 @@ public:
   virtual void Share(double* values, int width, int colour, std::vector<std::int64_t>* changed) = 0;
   /// The largest `value` of all pieces.
   virtual double Maximum(double value) = 0;
+  /// Every piece's `values`, one piece after the other in the pieces' order.
+  virtual std::vector<double> Gather(const std::vector<double>& values) = 0;
 };
 
 struct BoundarySmoothOptions
@@ -251,10 +256,13 @@ struct BoundarySmoothOptions
   /// HeldPoints, and the steps of the iterations move this piece's points as the whole mesh's
   /// are moved, given CellRootColours: the roles and the steps' targets and positions of the
   /// held points come from the pieces that move them, and the bounds from all pieces' cells
-  /// (header comment). The volume restoration and the quality improvement that follow are not
-  /// exchanged: they hold HeldPointsAfterSteps too.
+  /// (header comment). So are the small parts (their sizes and depths are summed over all
+  /// pieces), the volume restoration's rounds (the volumes and the weights of its system are
+  /// exact sums over all pieces) and the quality improvement's sweeps (their candidates move in
+  /// root blocks, the sweeps end together). GhostPoints: per point, non-zero for a point of a
+  /// ghost cell, by which the small parts find the points other pieces may have.
   SmoothingExchange* Exchange = nullptr;
-  const std::uint8_t* HeldPointsAfterSteps = nullptr;
+  const std::uint8_t* GhostPoints = nullptr;
 };
 
 struct BoundarySmoothStats
@@ -373,19 +381,27 @@ private:
   /// tips: the interior-layer points with at most one interior neighbour.
   template <class IdType>
   void KeepSmallParts(const IdType* connectivity, const std::vector<std::uint8_t>& tips);
+  /// With an exchange: each part's size and depth over all pieces (KeepSmallParts).
+  template <class IdType, class Find>
+  void JoinPartsOfPieces(const IdType* connectivity, Find& find, std::vector<std::int64_t>& size,
+    std::vector<std::uint8_t>& deep) const;
 
   /// Junctions, after the surface neighbours are known: see the header comment.
   template <class IdType, class MaterialType, class Executor>
   void ConstrainJunctions(const IdType* connectivity, const MaterialType* materials,
     const std::vector<std::uint8_t>& surfaceMasks, Executor& executor);
 
-  /// Adds value(c) to sums[key(c)] for the cells c in order (deterministic sums), with one map
-  /// lookup per run of one key: runs are the rule, cells come leaf by leaf.
+  /// Sets sums[key] to the sum of value(c) over the cells c of that key but the skipped ones, and
+  /// with an exchange over all pieces' cells: exact sums, rounded once, so the same whatever the
+  /// order of the cells or their split into pieces. One map lookup per run of one key: runs are
+  /// the rule, cells come leaf by leaf.
   template <class Key, class Value>
   static void SumPerKey(std::int64_t cells, Key&& key, Value&& value,
-    std::map<std::int64_t, double>& sums, const std::uint8_t* skipped)
+    std::map<std::int64_t, double>& sums, const std::uint8_t* skipped,
+    SmoothingExchange* exchange = nullptr)
   {
-    auto current = sums.end();
+    std::map<std::int64_t, ExactSum> exact;
+    auto current = exact.end();
     for (std::int64_t c = 0; c < cells; ++c)
     {
       if (skipped && skipped[c])
@@ -393,13 +409,23 @@ private:
         continue;
       }
       const std::int64_t k = key(c);
-      if (current == sums.end() || current->first != k)
+      if (current == exact.end() || current->first != k)
       {
-        current = sums.emplace(k, 0.0).first;
+        current = exact.emplace(k, ExactSum()).first;
       }
-      current->second += value(c);
+      current->second.Add(value(c));
+    }
+    SumOverPieces(exact, exchange);
+    sums.clear();
+    for (const auto& entry : exact)
+    {
+      sums.emplace(entry.first, entry.second.Value());
     }
   }
+
+  /// The exact sums per key of all pieces, in every piece (nothing to do without an exchange).
+  template <class Key>
+  static void SumOverPieces(std::map<Key, ExactSum>& sums, SmoothingExchange* exchange);
 
   /// Compressed rows from rows gathered per chunk of points: offsets holds each point's count
   /// at p + 1 and becomes the prefix sums; the chunks are joined in order and freed.
@@ -476,6 +502,24 @@ private:
     std::vector<std::int64_t> Points;                // ascending
     std::vector<std::int64_t> Offsets;               // block b: Points[Offsets[b], Offsets[b + 1])
     std::vector<std::vector<std::int64_t>> ByColour; // the blocks of each colour
+  };
+  /// A kernel over the points of a list run over whole blocks of one colour instead: each
+  /// block's points in order, the blocks in parallel.
+  template <class PointKernel>
+  struct BlockKernel
+  {
+    using Scratch = typename PointKernel::Scratch;
+    const PointKernel* Kernel;
+    const PointBlocks* Blocks;
+    const std::vector<std::int64_t>* Colour;
+    void operator()(Scratch& scratch, std::int64_t begin, std::int64_t end) const
+    {
+      for (std::int64_t i = begin; i < end; ++i)
+      {
+        const std::int64_t block = (*this->Colour)[i];
+        (*this->Kernel)(scratch, this->Blocks->Offsets[block], this->Blocks->Offsets[block + 1]);
+      }
+    }
   };
   static constexpr std::int64_t BlockSize = 256;
   /// Root colours (CellRootColours): 3^Dim, as stm::RootColouring counts them.
@@ -575,6 +619,58 @@ private:
 };
 
 // --- implementation ----------------------------------------------------------------------------
+
+template <int Dim>
+template <class Key>
+void BoundarySmoother<Dim>::SumOverPieces(
+  std::map<Key, ExactSum>& sums, SmoothingExchange* exchange)
+{
+  if (!exchange)
+  {
+    return;
+  }
+  // Rows of the key's integers (exact as doubles below 2^53, and the Outside marker -2^63) and
+  // one part of the sum.
+  constexpr bool pair = !std::is_same<Key, std::int64_t>::value;
+  constexpr std::size_t width = pair ? 3 : 2;
+  std::vector<double> rows;
+  for (const auto& entry : sums)
+  {
+    std::vector<double> parts = entry.second.Parts();
+    if (parts.empty())
+    {
+      parts.push_back(0.0); // a zero sum still names its key in every piece
+    }
+    for (const double part : parts)
+    {
+      if constexpr (pair)
+      {
+        rows.push_back(static_cast<double>(entry.first.first));
+        rows.push_back(static_cast<double>(entry.first.second));
+      }
+      else
+      {
+        rows.push_back(static_cast<double>(entry.first));
+      }
+      rows.push_back(part);
+    }
+  }
+  const std::vector<double> all = exchange->Gather(rows);
+  sums.clear();
+  for (std::size_t at = 0; at + width <= all.size(); at += width)
+  {
+    Key key;
+    if constexpr (pair)
+    {
+      key = { static_cast<std::int64_t>(all[at]), static_cast<std::int64_t>(all[at + 1]) };
+    }
+    else
+    {
+      key = static_cast<std::int64_t>(all[at]);
+    }
+    sums[key].Add(all[at + width - 1]);
+  }
+}
 
 template <int Dim>
 template <class IdType, class MaterialType, class Executor>
@@ -1000,13 +1096,24 @@ void BoundarySmoother<Dim>::KeepSmallParts(
   };
   std::vector<std::int64_t> size(static_cast<std::size_t>(n), 0);
   std::vector<std::uint8_t> deep(static_cast<std::size_t>(n), 0);
+  // A piece joins the edges, counts the points and finds the depth of the points it moves,
+  // whose edges it has in full; the held points join their movers' parts across the pieces.
+  const std::uint8_t* held =
+    this->Options.Exchange ? this->Options.HeldPoints : static_cast<const std::uint8_t*>(nullptr);
   for (std::int64_t p = 0; p < n; ++p)
   {
     if (this->Roles[p] != InteriorLayer)
     {
       continue;
     }
-    root[p] = p;
+    if (root[p] < 0)
+    {
+      root[p] = p; // else a held point an earlier point joined
+    }
+    if (held && held[p])
+    {
+      continue;
+    }
     for (std::int64_t k = this->EdgeOffsets[p]; k < this->EdgeOffsets[p + 1]; ++k)
     {
       const std::int64_t q = this->EdgeNeighbours[k];
@@ -1014,8 +1121,12 @@ void BoundarySmoother<Dim>::KeepSmallParts(
       {
         deep[p] = 1;
       }
-      else if (q < p && this->Roles[q] == InteriorLayer)
+      else if ((q < p || (held && held[q])) && this->Roles[q] == InteriorLayer)
       {
+        if (root[q] < 0)
+        {
+          root[q] = q; // a held point after p
+        }
         const std::int64_t a = find(p), b = find(q);
         root[std::max(a, b)] = std::min(a, b);
       }
@@ -1026,12 +1137,17 @@ void BoundarySmoother<Dim>::KeepSmallParts(
     if (root[p] >= 0)
     {
       const std::int64_t r = find(p);
-      size[r] += 1;
-      deep[r] |= deep[p];
+      const bool counted = !(held && held[p]);
+      size[r] += counted;
+      deep[r] |= counted && deep[p];
     }
   }
-  // Held: the tips, and the points of the small parts with every corner of their cells.
-  std::vector<std::int64_t> held;
+  if (held)
+  {
+    this->JoinPartsOfPieces(connectivity, find, size, deep);
+  }
+  // Kept: the tips, and the points of the small parts with every corner of their cells.
+  std::vector<std::int64_t> kept;
   for (std::int64_t p = 0; p < n; ++p)
   {
     if (root[p] < 0)
@@ -1045,22 +1161,132 @@ void BoundarySmoother<Dim>::KeepSmallParts(
     {
       if (tips[p])
       {
-        held.push_back(p);
+        kept.push_back(p);
       }
       continue;
     }
     for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
     {
       const IdType* ids = connectivity + this->Incidence.Cells[k] * (Dim + 1);
-      held.insert(held.end(), ids, ids + Dim + 1);
+      kept.insert(kept.end(), ids, ids + Dim + 1);
     }
   }
-  for (const std::int64_t p : held)
+  for (const std::int64_t p : kept)
   {
     if (this->Roles[p] == InteriorLayer || this->Roles[p] == Surface)
     {
       this->Roles[p] = this->Roles[p] == Surface ? KeptSurface : Fixed;
       ++this->Stats.KeptPoints;
+    }
+  }
+}
+
+template <int Dim>
+template <class IdType, class Find>
+void BoundarySmoother<Dim>::JoinPartsOfPieces(const IdType* connectivity, Find& find,
+  std::vector<std::int64_t>& size, std::vector<std::uint8_t>& deep) const
+{
+  constexpr std::int64_t Corners = Dim + 1;
+  const std::int64_t n = this->NumberOfPoints;
+  // The points other pieces may have: the held points, and the corners of the cells at a point
+  // of a ghost cell (what the exchange sends). Their positions have not moved yet: they name
+  // the points alike in every piece.
+  const std::uint8_t* ghostPoints = this->Options.GhostPoints;
+  std::vector<std::uint8_t> shared(this->Options.HeldPoints, this->Options.HeldPoints + n);
+  for (std::int64_t c = 0; ghostPoints && c < this->NumberOfCells; ++c)
+  {
+    const IdType* ids = connectivity + c * Corners;
+    if (std::any_of(ids, ids + Corners, [&](IdType id) { return ghostPoints[id] != 0; }))
+    {
+      for (int v = 0; v < Corners; ++v)
+      {
+        shared[static_cast<std::size_t>(ids[v])] = 1;
+      }
+    }
+  }
+  // This piece's block: its parts with a shared point (their size and depth here), then the
+  // shared points (part, position).
+  std::map<std::int64_t, std::int64_t> partIndex;
+  std::vector<double> parts, rows;
+  for (std::int64_t p = 0; p < n; ++p)
+  {
+    if (shared[p] && this->Roles[p] == InteriorLayer)
+    {
+      const std::int64_t r = find(p);
+      const auto found = partIndex.emplace(r, static_cast<std::int64_t>(partIndex.size()));
+      if (found.second)
+      {
+        parts.push_back(static_cast<double>(size[r]));
+        parts.push_back(deep[r]);
+      }
+      rows.push_back(static_cast<double>(found.first->second));
+      rows.insert(rows.end(), this->Points + p * Dim, this->Points + (p + 1) * Dim);
+    }
+  }
+  std::vector<double> block{ static_cast<double>(partIndex.size()),
+    static_cast<double>(rows.size() / (Dim + 1)) };
+  block.insert(block.end(), parts.begin(), parts.end());
+  block.insert(block.end(), rows.begin(), rows.end());
+  const std::vector<double> all = this->Options.Exchange->Gather(block);
+
+  // Every piece's parts as nodes, joined where they share a point.
+  std::vector<std::int64_t> parent;
+  std::vector<std::int64_t> nodeSize;
+  std::vector<std::uint8_t> nodeDeep;
+  auto findNode = [&parent](std::int64_t a)
+  {
+    while (parent[a] != a)
+    {
+      parent[a] = parent[parent[a]];
+      a = parent[a];
+    }
+    return a;
+  };
+  std::map<std::array<double, Dim>, std::int64_t> nodeOfPoint;
+  for (std::size_t at = 0; at + 2 <= all.size();)
+  {
+    const auto partCount = static_cast<std::int64_t>(all[at]);
+    const auto rowCount = static_cast<std::int64_t>(all[at + 1]);
+    at += 2;
+    const auto first = static_cast<std::int64_t>(parent.size());
+    for (std::int64_t i = 0; i < partCount; ++i, at += 2)
+    {
+      parent.push_back(first + i);
+      nodeSize.push_back(static_cast<std::int64_t>(all[at]));
+      nodeDeep.push_back(all[at + 1] != 0.0);
+    }
+    for (std::int64_t i = 0; i < rowCount; ++i, at += Dim + 1)
+    {
+      const std::int64_t node = first + static_cast<std::int64_t>(all[at]);
+      std::array<double, Dim> position;
+      std::copy(all.begin() + at + 1, all.begin() + at + 1 + Dim, position.begin());
+      const auto found = nodeOfPoint.emplace(position, node);
+      if (!found.second)
+      {
+        const std::int64_t a = findNode(node), b = findNode(found.first->second);
+        parent[std::max(a, b)] = std::min(a, b);
+      }
+    }
+  }
+  std::vector<std::int64_t> totalSize(parent.size(), 0);
+  std::vector<std::uint8_t> totalDeep(parent.size(), 0);
+  for (std::size_t node = 0; node < parent.size(); ++node)
+  {
+    const std::int64_t r = findNode(static_cast<std::int64_t>(node));
+    totalSize[r] += nodeSize[node];
+    totalDeep[r] |= nodeDeep[node];
+  }
+  // This piece's parts take the totals of the nodes their shared points belong to.
+  for (std::int64_t p = 0; p < n; ++p)
+  {
+    if (shared[p] && this->Roles[p] == InteriorLayer)
+    {
+      const std::int64_t r = find(p);
+      std::array<double, Dim> position;
+      std::copy(this->Points + p * Dim, this->Points + (p + 1) * Dim, position.begin());
+      const std::int64_t node = findNode(nodeOfPoint.at(position));
+      size[r] = totalSize[node];
+      deep[r] = totalDeep[node];
     }
   }
 }
@@ -1188,7 +1414,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     SumPerKey(
       cells, [&](std::int64_t c) { return options.VolumeTargetMaterials[c]; },
       [&](std::int64_t c) { return this->Determinants[c] / Factorial(Dim); },
-      this->Stats.TargetVolumes, options.GhostCells);
+      this->Stats.TargetVolumes, options.GhostCells, options.Exchange);
   }
   // The volumes are summed; the final measure makes the determinants again (8 bytes per cell
   // less at the peak of the iterations).
@@ -1572,6 +1798,10 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   if (options.SmallPartPoints > 0)
   {
     this->KeepSmallParts(connectivity, tips);
+    if (options.Exchange)
+    {
+      this->ShareRoles(); // the held points' kept roles are their movers'
+    }
   }
 
   // The movable points of each step, in coloured blocks.
@@ -1654,19 +1884,6 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
     }
     executor.ReportProgress(0.1 + 0.8 * (iteration + 1) / options.NumberOfIterations);
   }
-  this->Exchanging = false;
-  if (options.Exchange)
-  {
-    // What follows is not exchanged: it holds the points other pieces have.
-    for (std::int64_t p = 0; p < numberOfPoints; ++p)
-    {
-      if (options.HeldPoints[p] ||
-        (options.HeldPointsAfterSteps && options.HeldPointsAfterSteps[p]))
-      {
-        this->Roles[p] = Fixed;
-      }
-    }
-  }
   if (!this->Stats.TargetVolumes.empty())
   {
     status = this->RestoreVolumes(surfaceBlocks, connectivity, materials, projector, executor);
@@ -1680,6 +1897,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   {
     return status;
   }
+  this->Exchanging = false;
   executor.ReportProgress(0.95);
 
   // What the moves needed goes before the final measure needs its determinants again.
@@ -2497,6 +2715,8 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
     return Status::Ok();
   }
   constexpr std::int64_t Corners = Dim + 1;
+  // Pieces move the candidates they own and share the positions after every colour.
+  SmoothingExchange* exchange = this->Exchanging ? options.Exchange : nullptr;
   auto isBad = [&](const Shape& shape)
   { return shape.Condition > options.MaxConditionNumber || shape.Cosine > this->OptionCosine; };
   // How far a cell is from the bounds: its worse ratio (1 at the bounds); an inverted cell is
@@ -2772,7 +2992,8 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
                          [&](std::int64_t c) { return !isBad(this->Shapes[c]); }),
           badCells.end());
       }
-      // Their movable points, coloured greedily in point order.
+      // Their movable points (with an exchange, also those other pieces move: their cells'
+      // shapes change).
       candidates.clear();
       for (const std::int64_t c : badCells)
       {
@@ -2789,39 +3010,81 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
       }
       std::sort(candidates.begin(), candidates.end());
       candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-      if (candidates.empty())
+      if (exchange ? exchange->Maximum(candidates.empty() ? 0.0 : 1.0) == 0.0 : candidates.empty())
       {
         return Status::Ok();
       }
-      const std::vector<std::vector<std::int64_t>> byColour = GreedyColouring(candidates, colours,
-        [&](std::int64_t p, auto&& visit)
-        {
-          for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1]; ++k)
-          {
-            const IdType* ids = connectivity + this->Incidence.Cells[k] * Corners;
-            for (int v = 0; v <= Dim; ++v)
-            {
-              visit(static_cast<std::int64_t>(ids[v]));
-            }
-          }
-        });
-      for (const std::int64_t p : candidates)
-      {
-        colours[p] = -1;
-      }
       std::atomic<std::int64_t> improved{ 0 };
-      for (const auto& points : byColour)
+      std::vector<std::int64_t> changed; // the held points other pieces moved in this sweep
+      if (options.CellRootColours)
       {
-        ImproveKernel kernel{ this, &points, connectivity, materials, &projector, project, &badness,
-          &executor, &improved, phase == 1 };
-        executor.For(0, static_cast<std::int64_t>(points.size()), 16, kernel);
-        if (executor.ShouldAbort())
+        // The root blocks of the candidates, a colour after the other, each block in ascending
+        // order: the same moves in a whole mesh and in its pieces (the held candidates are
+        // moved by the pieces that own their blocks).
+        std::vector<std::int64_t> moving;
+        for (const std::int64_t p : candidates)
         {
-          return Status::Aborted();
+          if (!(exchange && options.HeldPoints[p]))
+          {
+            moving.push_back(p);
+          }
+        }
+        PointBlocks blocks;
+        this->MakeRootBlocks(connectivity, std::move(moving), blocks, executor);
+        ImproveKernel kernel{ this, &blocks.Points, connectivity, materials, &projector, project,
+          &badness, &executor, &improved, phase == 1 };
+        for (const std::vector<std::int64_t>& colour : blocks.ByColour)
+        {
+          BlockKernel<ImproveKernel> byBlock{ &kernel, &blocks, &colour };
+          executor.For(0, static_cast<std::int64_t>(colour.size()), 1, byBlock);
+          if (executor.ShouldAbort())
+          {
+            return Status::Aborted();
+          }
+          if (exchange)
+          {
+            const std::size_t before = changed.size();
+            exchange->Share(
+              this->Points, Dim, static_cast<int>(&colour - blocks.ByColour.data()), &changed);
+            this->MeasureAround(
+              connectivity, std::vector<std::int64_t>(changed.begin() + before, changed.end()));
+          }
+        }
+      }
+      else
+      {
+        const std::vector<std::vector<std::int64_t>> byColour = GreedyColouring(candidates, colours,
+          [&](std::int64_t p, auto&& visit)
+          {
+            for (std::int64_t k = this->Incidence.Offsets[p]; k < this->Incidence.Offsets[p + 1];
+                 ++k)
+            {
+              const IdType* ids = connectivity + this->Incidence.Cells[k] * Corners;
+              for (int v = 0; v <= Dim; ++v)
+              {
+                visit(static_cast<std::int64_t>(ids[v]));
+              }
+            }
+          });
+        for (const std::int64_t p : candidates)
+        {
+          colours[p] = -1;
+        }
+        for (const auto& points : byColour)
+        {
+          ImproveKernel kernel{ this, &points, connectivity, materials, &projector, project,
+            &badness, &executor, &improved, phase == 1 };
+          executor.For(0, static_cast<std::int64_t>(points.size()), 16, kernel);
+          if (executor.ShouldAbort())
+          {
+            return Status::Aborted();
+          }
         }
       }
       this->Stats.ImprovedPoints += improved;
-      if (improved == 0)
+      // The cells another piece's moves changed are candidates' cells of the next sweep too.
+      candidates.insert(candidates.end(), changed.begin(), changed.end());
+      if (exchange ? exchange->Maximum(static_cast<double>(improved)) == 0.0 : improved == 0)
       {
         break;
       }
@@ -2840,6 +3103,8 @@ Status BoundarySmoother<Dim>::RestoreVolumes(const PointBlocks& surfaceBlocks,
   constexpr std::int64_t Outside = std::numeric_limits<std::int64_t>::min();
   const std::map<std::int64_t, double>& targets = this->Stats.TargetVolumes;
   const double factorial = Factorial(Dim);
+  // Pieces sum the volumes and the weights over all pieces, and share the moved points.
+  SmoothingExchange* exchange = this->Exchanging ? this->Options.Exchange : nullptr;
   // Per-cell volumes in parallel, then summed per material in cell order (deterministic).
   std::vector<double> cellVolumes(static_cast<std::size_t>(this->NumberOfCells));
   struct VolumeKernel
@@ -2874,7 +3139,7 @@ Status BoundarySmoother<Dim>::RestoreVolumes(const PointBlocks& surfaceBlocks,
     volumes.clear();
     SumPerKey(
       this->NumberOfCells, [&](std::int64_t c) { return static_cast<std::int64_t>(materials[c]); },
-      [&](std::int64_t c) { return cellVolumes[c]; }, volumes, this->Options.GhostCells);
+      [&](std::int64_t c) { return cellVolumes[c]; }, volumes, this->Options.GhostCells, exchange);
     // Over the materials that have cells and a target (a target material the cut did not keep
     // is no interface's to restore).
     double largest = 0.0;
@@ -3001,18 +3266,26 @@ Status BoundarySmoother<Dim>::RestoreVolumes(const PointBlocks& surfaceBlocks,
     // the materials with a target, the background and the outside held at 0.
     std::map<std::int64_t, int> unknown;
     std::map<std::pair<std::int64_t, std::int64_t>, double> weights;
-    for (std::int64_t i = 0; i < count; ++i)
     {
-      if (first[i] == Outside)
+      std::map<std::pair<std::int64_t, std::int64_t>, ExactSum> exact;
+      for (std::int64_t i = 0; i < count; ++i)
       {
-        continue;
+        if (first[i] == Outside)
+        {
+          continue;
+        }
+        double squared = 0.0;
+        for (int c = 0; c < Dim; ++c)
+        {
+          squared += gradients[i * Dim + c] * gradients[i * Dim + c];
+        }
+        exact[{ std::min(first[i], second[i]), std::max(first[i], second[i]) }].Add(squared);
       }
-      double squared = 0.0;
-      for (int c = 0; c < Dim; ++c)
+      SumOverPieces(exact, exchange);
+      for (const auto& entry : exact)
       {
-        squared += gradients[i * Dim + c] * gradients[i * Dim + c];
+        weights.emplace(entry.first, entry.second.Value());
       }
-      weights[{ std::min(first[i], second[i]), std::max(first[i], second[i]) }] += squared;
     }
     auto free = [&](std::int64_t material)
     {
@@ -3114,7 +3387,6 @@ Status BoundarySmoother<Dim>::RestoreVolumes(const PointBlocks& surfaceBlocks,
     // The targets of the moves, validated like the smoothing's.
     for (std::int64_t i = 0; i < count; ++i)
     {
-      // (A piece's points that other pieces have are fixed after the exchanged steps.)
       if (first[i] == Outside || this->Roles[points[i]] == Fixed)
       {
         continue;
