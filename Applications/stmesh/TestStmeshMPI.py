@@ -356,14 +356,13 @@ def facets_of_one_cell(cells):
 
 def case_border_quality(c):
     # The AAL atlas with all 116 labels on 1 and 2 ranks. The pieces exchange the points they
-    # share in every step of the smoothing (stmPieceExchange.h), then improve the cells at those
-    # points in turns (stmPieceBorder.h). Before the pass, two cells next to them stayed at
-    # condition number 4.54 and 9.1 degrees. Both meshes must meet issue 7's bounds, a condition
-    # number of at most 4 and angles of at least 10 degrees, recomputed from the pieces merged by
-    # their global ids (the shared points agree bit for bit) and in the summary. (The one-rank
-    # mesh reaches 3.51 and 15.0, the two ranks' 3.57 and 15.0: the pieces' volume restoration
-    # and quality improvement are not exchanged yet and take other paths.) The union has
-    # the one-rank mesh's outer facets (a crack adds its two sides).
+    # share in every part of the smoothing but the edge splits (stmPieceExchange.h). (Before
+    # the exchange, two cells next to the shared points stayed at condition number 4.54 and 9.1
+    # degrees until a pass over them, stmPieceBorder.h.) Both meshes must meet issue 7's
+    # bounds, a condition number of at most 4 and angles of at least 10 degrees, recomputed from
+    # the pieces merged by their global ids (the shared points agree bit for bit) and in the
+    # summary. (Both reach 3.500 and 15.0.) The union has the one-rank mesh's outer facets (a
+    # crack adds its two sides).
     arguments = [c.aal, "--labels", "all", "--materials", "separate"]
     outer = {}
     for ranks in (1, 2):

@@ -55,12 +55,13 @@
  * exactly over all pieces: stm::ExactSum; the targets from stmMultiMaterialCut's
  * "OriginalMaterialVolumeParts", which the filter removes from its output) and the quality
  * improvement (its candidates move in root blocks). The interior edge splits are not exchanged
- * yet: they hold the points of the ghost cells. The ranks then improve the
- * cells beyond the quality bounds at the points their pieces share, together: each updates its
- * ghost cells to the neighbours' smoothed points, and in rank order each improves such cells,
- * moving the shared points too, and sends what it moved (stmPieceBorder.h). The shared points
- * stay equal bit for bit. Every rank must then execute the filter, as for VTK's other parallel
- * filters. The filter removes "RootColour" from its output.
+ * yet: they hold the points of the ghost cells. When the ranks cannot exchange (e.g. cells
+ * without root colours), they instead improve the cells beyond the quality bounds at the points
+ * their pieces share after the smoothing, together: each updates its ghost cells to the
+ * neighbours' smoothed points, and in rank order each improves such cells, moving the shared
+ * points too, and sends what it moved (stmPieceBorder.h). Either way the shared points stay
+ * equal bit for bit. Every rank must execute the filter, as for VTK's other parallel filters.
+ * The filter removes "RootColour" from its output.
  *
  * @sa stmMarchingSimplices stmSeparatingFunction
  */
