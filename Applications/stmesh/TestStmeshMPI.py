@@ -354,6 +354,22 @@ def facets_of_one_cell(cells):
     return int((uses == 1).sum())
 
 
+def same_cells(first, second):
+    """Whether two meshes, each (positions, cells) as merged_pieces gives them, have the same
+    cells by their corners' coordinates, bit for bit."""
+    import numpy as np
+    (positions1, cells1), (positions2, cells2) = first, second
+    if len(cells1) != len(cells2):
+        return False
+    # One id per distinct position of either mesh, then each cell as its sorted ids.
+    _, ids = np.unique(np.concatenate([positions1, positions2]), axis=0, return_inverse=True)
+    ids = ids.reshape(-1)
+    rows = [np.sort(ids[offset + cells], axis=1)
+            for offset, cells in ((0, cells1), (len(positions1), cells2))]
+    rows = [r[np.lexsort(r.T[::-1])] for r in rows]
+    return np.array_equal(rows[0], rows[1])
+
+
 def case_border_quality(c):
     # The AAL atlas with all 116 labels on 1 and 2 ranks. The pieces exchange the points they
     # share in every part of the smoothing but the edge splits (stmPieceExchange.h). (Before
@@ -362,9 +378,10 @@ def case_border_quality(c):
     # bounds, a condition number of at most 4 and angles of at least 10 degrees, recomputed from
     # the pieces merged by their global ids (the shared points agree bit for bit) and in the
     # summary. (Both reach 3.500 and 15.0.) The union has the one-rank mesh's outer facets (a
-    # crack adds its two sides).
+    # crack adds its two sides), and here even the one-rank mesh's cells bit for bit: the
+    # edges the smoothing splits (not exchanged) lie away from the pieces' border.
     arguments = [c.aal, "--labels", "all", "--materials", "separate"]
-    outer = {}
+    outer, meshes = {}, {}
     for ranks in (1, 2):
         output, summary = c.path("aal%d.pvtu" % ranks), c.path("aal%d.json" % ranks)
         c.run_ranks(ranks, arguments + ["-o", output, "--summary", summary],
@@ -381,7 +398,9 @@ def case_border_quality(c):
               "%d ranks: the summary's quality: %s, %s" % (
                   ranks, quality["worst_condition"], quality["smallest_dihedral_degrees"]))
         outer[ranks] = facets_of_one_cell(cells)
+        meshes[ranks] = (positions, cells)
     check(outer[2] == outer[1], "2 ranks: %d outer facets, 1 rank %d" % (outer[2], outer[1]))
+    check(same_cells(meshes[1], meshes[2]), "2 ranks: not the one-rank mesh's cells")
 
 
 def case_empty_pieces(c):
