@@ -52,7 +52,7 @@ TEST(ExactSumTest, TheSumDoesNotDependOnTheOrderOrTheSplitOfTheAdditions)
     const int shift = static_cast<int>(random() % 60);
     const std::int64_t sign = random() % 3 == 0 ? -1 : 1;
     addends.push_back(std::ldexp(static_cast<double>(sign * mantissa), shift - Scale));
-    exact += static_cast<Wide>(sign * mantissa) << shift;
+    exact += static_cast<Wide>(sign * mantissa) * (Wide{ 1 } << shift);
   }
   stm::ExactSum inOrder;
   for (const double addend : addends)
