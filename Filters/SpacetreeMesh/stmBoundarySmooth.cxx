@@ -164,10 +164,13 @@ vtkSmartPointer<vtkAbstractArray> ExtendedCopy(vtkAbstractArray* source, vtkIdTy
 /// The output with the edits of InteriorEdgeSplit: new points appended (point data at the
 /// edge's midpoint, zero displacement), cells changed in place and appended (cell data of the
 /// cell each was split from). An edge may end at a point an earlier split added, so the ends are
-/// read from the extended arrays, which hold every new point before the next one.
+/// read from the extended arrays, which hold every new point before the next one. A piece whose
+/// smoothing was exchanged splits with the exchange the edges the whole mesh's run splits;
+/// another piece splits only edges between its own points (not `heldPoints`).
 template <int Dim, class IdType>
 stm::Status SplitEdges(SmoothRequest& request, const IdType* connectivity,
-  const std::vector<double>& local, const std::uint8_t* heldPoints, stmSMPExecutor& executor)
+  const std::vector<double>& local, const std::uint8_t* heldPoints,
+  stm::SmoothingExchange* exchange, stmSMPExecutor& executor)
 {
   // A 64-bit copy: InteriorEdgeSplit keeps 64-bit materials, and the smoother's records, the
   // peak of the stage, are freed by now.
@@ -178,7 +181,9 @@ stm::Status SplitEdges(SmoothRequest& request, const IdType* connectivity,
   stm::InteriorEdgeSplitOptions options;
   options.MaxConditionNumber = request.Options.MaxConditionNumber;
   options.MinDihedralAngle = request.Options.MinDihedralAngle;
-  options.HeldPoints = heldPoints;
+  options.HeldPoints = exchange ? nullptr : heldPoints;
+  options.Exchange = exchange;
+  options.GhostCells = exchange ? stmPieces::GhostCellFlags(request.Input) : nullptr;
   stm::InteriorEdgeSplit<Dim> split;
   const stm::Status status = split.Split(local.data(), points, connectivity, cells,
     materials.empty() ? nullptr : materials.data(), options, executor);
@@ -523,14 +528,13 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
     });
   output->SetPoints(moved);
   output->GetPointData()->AddArray(displacement);
-  // In a piece only edges between own points (not held): whether an edge with a shared end is
-  // split would depend on both sides' moves.
-  if (!request.Filter->GetSplitInteriorEdges() || request.Filter->GetAbortExecute())
+  // Every rank takes part in an exchanged split, even when aborted (it tells the others so).
+  if (!request.Filter->GetSplitInteriorEdges() || (!exchange && request.Filter->GetAbortExecute()))
   {
     return stm::Status::Ok();
   }
   return SplitEdges<Dim>(
-    request, connectivity, local, held.empty() ? nullptr : held.data(), executor);
+    request, connectivity, local, held.empty() ? nullptr : held.data(), exchange.get(), executor);
 }
 } // namespace
 

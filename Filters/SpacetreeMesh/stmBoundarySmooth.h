@@ -54,8 +54,9 @@
  * volume restoration (the ranks sum the volumes per material and the weights of its system
  * exactly over all pieces: stm::ExactSum; the targets from stmMultiMaterialCut's
  * "OriginalMaterialVolumeParts", which the filter removes from its output) and the quality
- * improvement (its candidates move in root blocks). The interior edge splits are not exchanged
- * yet: they hold the points of the ghost cells. When the ranks cannot exchange (e.g. cells
+ * improvement (its candidates move in root blocks), and the interior edge splits (the ranks
+ * gather the cells around every piece's bad cells and each runs the whole mesh's splits on
+ * them). When the ranks cannot exchange (e.g. cells
  * without root colours), they instead improve the cells beyond the quality bounds at the points
  * their pieces share after the smoothing, together: each updates its ghost cells to the
  * neighbours' smoothed points, and in rank order each improves such cells, moving the shared
@@ -283,7 +284,7 @@ public:
 
   /**
    * Result of the last update with SplitInteriorEdges: the edges split (each added one point and
-   * as many cells as were around it).
+   * as many cells as were around it); in a piece, the new points the piece holds.
    */
   vtkGetMacro(NumberOfSplitEdges, vtkIdType);
 

@@ -3,12 +3,13 @@ Split Into Pieces, every rank asking for its own piece: `mpiexec -n P pvbatch --
 Each point is moved by the piece that owns the root cell of its block, and the pieces exchange
 the roles, the Taubin targets and, after every colour of root cells, the positions of the points
 they share; the volume restoration sums the volumes and its weights exactly over all pieces, and
-the quality improvement moves its candidates in root blocks. With the parts that are not
-exchanged yet turned off (the small parts and the edge splits) the owned cells of the P pieces
-are the serial mesh's cells bit for bit: 3D nested ellipsoids with a one-voxel layer to
-MultiMaterialCut (volume targets from its OriginalMaterialVolumes, and from the cells'
-OriginalMaterial), and a 2D image to MarchingSimplices. With every part on, the pieces still
-conform: as many cells as the serial mesh.
+the quality improvement moves its candidates in root blocks, the small parts are joined across
+pieces, and the edge splits are made on the union of the cells around all pieces' bad cells.
+With every part on, the owned cells of the P pieces are the serial mesh's cells bit for bit: 3D
+nested ellipsoids with a one-voxel layer to MultiMaterialCut (volume targets from its
+OriginalMaterialVolumes, and from the cells' OriginalMaterial with bounds tight enough that the
+improvement moves points; with noise at the centre, where the serial run splits edges, to
+MultiMaterialCut), and a 2D image to MarchingSimplices.
 """
 import os
 
@@ -27,7 +28,7 @@ T.check(ranks > 1, "run under mpiexec with several ranks, not %d" % ranks)
 temp = os.environ.get("STM_TEMP_DIR", ".")
 
 
-def chain(image, cut, exchanged_only, targets="field"):
+def chain(image, cut, targets="field"):
     """targets "cells": the volume targets from the cells' OriginalMaterial, and bounds tight
     enough that the quality improvement moves points."""
     producer = vtkTrivialProducer()
@@ -47,7 +48,6 @@ def chain(image, cut, exchanged_only, targets="field"):
     else:
         T.append_stages(stages, spacetreemesh.stmVertexSnap, spacetreemesh.stmMarchingSimplices)
     smooth = T.append_stages(stages, spacetreemesh.stmBoundarySmooth)
-    smooth.SetSplitInteriorEdges(not exchanged_only)
     smooth.SetRestoreOriginalVolumes(cut == "materials")
     if targets == "cells":
         smooth.SetMaxConditionNumber(2.0)
@@ -55,9 +55,9 @@ def chain(image, cut, exchanged_only, targets="field"):
     return stages
 
 
-def check(labels, nodes, cut, exchanged_only, what, targets="field"):
+def check(labels, nodes, cut, what, targets="field", must_split=False):
     image = T.make_image(labels)
-    stages = chain(image, cut, exchanged_only, targets)
+    stages = chain(image, cut, targets)
     errors = [T.ErrorCollector(stage) for stage in stages[1:]]
     T.check(stages[-1].UpdatePiece(rank, ranks, 0) == 1, "%s: rank %d failed" % (what, rank))
     T.check(not any(e.errors for e in errors), "%s: rank %d: %r" % (
@@ -69,10 +69,10 @@ def check(labels, nodes, cut, exchanged_only, what, targets="field"):
     smooth = stages[-1]
     errors_path = os.path.join(temp, "errors_%d_%d.npy" % (ranks, rank))
     np.save(errors_path, [smooth.GetLargestVolumeErrorBefore(), smooth.GetLargestVolumeErrorAfter(),
-                          smooth.GetNumberOfImprovedPoints()])
+                          smooth.GetNumberOfImprovedPoints(), smooth.GetNumberOfSplitEdges()])
     controller.Barrier()
     if rank == 0:
-        serial = chain(image, cut, exchanged_only, targets)
+        serial = chain(image, cut, targets)
         serial[-1].Update()
         expected = T.owned_cell_rows(serial[-1].GetOutput(), nodes)
         together = np.concatenate([np.load(os.path.join(temp, "exact_%d_%d.npy" % (ranks, r)))
@@ -80,40 +80,51 @@ def check(labels, nodes, cut, exchanged_only, what, targets="field"):
         together = together[np.lexsort(together.T[::-1])]
         T.check(together.shape == expected.shape, "%s, %d ranks: %d owned cells, serial %d" % (
             what, ranks, len(together), len(expected)))
-        if exchanged_only:
-            # The restoration's volumes are the whole mesh's in every piece.
-            serial_errors = [serial[-1].GetLargestVolumeErrorBefore(),
-                             serial[-1].GetLargestVolumeErrorAfter()]
-            improved = 0
-            for r in range(ranks):
-                piece = list(np.load(os.path.join(temp, "errors_%d_%d.npy" % (ranks, r))))
-                T.check(piece[:2] == serial_errors, "%s, %d ranks: rank %d's volume errors %r, "
-                        "serial %r" % (what, ranks, r, piece[:2], serial_errors))
-                improved += piece[2]
-            T.check(cut != "materials" or serial_errors[0] > serial_errors[1] > 0.0,
-                    "%s: the restoration did not restore: %r" % (what, serial_errors))
-            # Each improved point counted by the piece that moves it.
-            serial_improved = serial[-1].GetNumberOfImprovedPoints()
-            T.check(improved == serial_improved, "%s, %d ranks: %d points improved, serial %d"
-                    % (what, ranks, improved, serial_improved))
-            T.check(targets != "cells" or serial_improved > 0, "%s: nothing improved" % what)
-            print("%s: volume errors %r, %d points improved, %d kept" % (
-                what, serial_errors, serial_improved, serial[-1].GetNumberOfKeptPoints()))
-            differing = np.count_nonzero(np.any(together != expected, axis=1))
-            T.check(differing == 0, "%s, %d ranks: %d of %d cells differ from the serial mesh's"
-                    % (what, ranks, differing, len(expected)))
-        print("%s, %d ranks: %d cells%s" % (what, ranks, len(expected),
-                                            ", the serial mesh's bit for bit" if exchanged_only
-                                            else ""))
+        # The restoration's volumes are the whole mesh's in every piece.
+        serial_errors = [serial[-1].GetLargestVolumeErrorBefore(),
+                         serial[-1].GetLargestVolumeErrorAfter()]
+        improved = 0
+        splits = []
+        for r in range(ranks):
+            piece = list(np.load(os.path.join(temp, "errors_%d_%d.npy" % (ranks, r))))
+            T.check(piece[:2] == serial_errors, "%s, %d ranks: rank %d's volume errors %r, "
+                    "serial %r" % (what, ranks, r, piece[:2], serial_errors))
+            improved += piece[2]
+            splits.append(int(piece[3]))
+        T.check(cut != "materials" or serial_errors[0] > serial_errors[1] > 0.0,
+                "%s: the restoration did not restore: %r" % (what, serial_errors))
+        # Each improved point counted by the piece that moves it.
+        serial_improved = serial[-1].GetNumberOfImprovedPoints()
+        T.check(improved == serial_improved, "%s, %d ranks: %d points improved, serial %d"
+                % (what, ranks, improved, serial_improved))
+        serial_splits = serial[-1].GetNumberOfSplitEdges()
+        T.check(targets != "cells" or serial_improved > 0, "%s: nothing improved" % what)
+        T.check(not must_split or serial_splits > 0, "%s: no edge split" % what)
+        # A piece counts the split edges whose new point it holds: at least the serial count
+        # together, more where the pieces share a split edge.
+        T.check(sum(splits) >= serial_splits, "%s, %d ranks: the pieces split %r edges, serial "
+                "%d" % (what, ranks, splits, serial_splits))
+        print("%s: volume errors %r, %d points improved, %d edges split (the pieces: %r), "
+              "%d kept" % (what, serial_errors, serial_improved, serial_splits, splits,
+                           serial[-1].GetNumberOfKeptPoints()))
+        differing = np.count_nonzero(np.any(together != expected, axis=1))
+        T.check(differing == 0, "%s, %d ranks: %d of %d cells differ from the serial mesh's"
+                % (what, ranks, differing, len(expected)))
+        print("%s, %d ranks: %d cells, the serial mesh's bit for bit" % (what, ranks,
+                                                                       len(expected)))
     controller.Barrier()
 
 
 three_d = T.nested_ellipsoids((40, 36, 44))
-check(three_d, 4, "materials", True, "3D to MultiMaterialCut, smoothed")
-check(three_d, 4, "materials", True, "3D to MultiMaterialCut, smoothed to the cells' volumes "
-      "and improved to tight bounds", "cells")
-check(three_d, 4, "materials", False, "3D to MultiMaterialCut, smoothed with every part")
+check(three_d, 4, "materials", "3D to MultiMaterialCut, smoothed")
+check(three_d, 4, "materials", "3D to MultiMaterialCut, smoothed to the cells' volumes and "
+      "improved to tight bounds", "cells")
+# Noise of labels 1 to 4 in a box of 10 voxels at the centre, where the pieces meet.
+noisy = three_d.copy()
+noisy[15:25, 13:23, 17:27] = np.random.RandomState(2).randint(1, 5, size=(10, 10, 10))
+check(noisy, 4, "materials", "3D with noise at the centre to MultiMaterialCut, smoothed and "
+      "split", must_split=True)
 yy, xx = np.mgrid[0:70, 0:64]
 two_d = ((xx - 30.5) ** 2 / 26.0 ** 2 + (yy - 36.0) ** 2 / 30.0 ** 2 < 1.0).astype(np.uint8)
 two_d[(xx - 30.5) ** 2 + (yy - 30.0) ** 2 < 12.0 ** 2] = 2
-check(two_d[np.newaxis], 3, "surface", True, "2D to MarchingSimplices, smoothed")
+check(two_d[np.newaxis], 3, "surface", "2D to MarchingSimplices, smoothed")

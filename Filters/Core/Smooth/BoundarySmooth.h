@@ -151,6 +151,7 @@
 #include "Common/PointCells.h"
 #include "Common/Status.h"
 #include "Common/UninitializedVector.h"
+#include "Smooth/SmoothingExchange.h"
 
 #include <algorithm>
 #include <array>
@@ -174,26 +175,6 @@ enum class SmoothingMethod
 {
   Taubin = 0,
   Laplacian = 1
-};
-
-/// The exchanges of a piece of a distributed mesh with the other pieces while the pieces smooth,
-/// so that the steps move every point as the whole mesh's do (BoundarySmoothOptions::Exchange).
-/// Every call is collective: all pieces make the same calls in the same order.
-class SmoothingExchange
-{
-public:
-  virtual ~SmoothingExchange() = default;
-  /// Whether every piece is `ready`; the first call.
-  virtual bool AllReady(bool ready) = 0;
-  /// Gives the points this piece does not move (HeldPoints) the values of the piece that moves
-  /// them: `width` doubles per point in `values`; with `colour` >= 0 only the points of that
-  /// root colour (the colour of the block its piece moves a point in), else all. Appends the
-  /// points whose values changed to `changed` when not null.
-  virtual void Share(double* values, int width, int colour, std::vector<std::int64_t>* changed) = 0;
-  /// The largest `value` of all pieces.
-  virtual double Maximum(double value) = 0;
-  /// Every piece's `values`, one piece after the other in the pieces' order.
-  virtual std::vector<double> Gather(const std::vector<double>& values) = 0;
 };
 
 struct BoundarySmoothOptions

@@ -13,21 +13,33 @@
 //
 // The cells beyond the bounds (condition number above MaxConditionNumber or smallest dihedral
 // angle, for triangles the smallest angle, below MinDihedralAngle) are visited worst first
-// (ties: smaller id). For each edge of the cell that lies inside one material, m starts at the
-// edge's midpoint, and a compass search (along the axes, from a quarter of the edge's length,
-// halved down to a thousandth of it, accepting only strict improvements) lowers the largest
-// badness of the new cells: max(condition / MaxConditionNumber, MinDihedralAngle / smallest
-// dihedral angle), infinite for a cell that would lose its orientation. The edge whose new
-// cells end least bad is split when that is less than the badness of the cells it replaces;
-// otherwise the cell stays. A cell already changed by an earlier split is measured again first.
+// (ties: by their corners' coordinates, so that the order does not depend on the numbering).
+// For each edge of the cell that lies inside one material, m starts at the edge's midpoint, and
+// a compass search (along the axes, from a quarter of the edge's length, halved down to a
+// thousandth of it, accepting only strict improvements) lowers the largest badness of the new
+// cells: max(condition / MaxConditionNumber, MinDihedralAngle / smallest dihedral angle),
+// infinite for a cell that would lose its orientation. The edge whose new cells end least bad is
+// split when that is less than the badness of the cells it replaces; otherwise the cell stays. A
+// cell already changed by an earlier split is measured again first.
+//
 // The result is a list of edits (new points, changed and appended cells) that the caller applies;
 // it does not depend on the number of threads.
+//
+// The pieces of a distributed mesh (Exchange) split the edges the whole mesh's run splits. A split
+// only reads and changes the cells around the corners of the cell it mends, and a piece holds
+// every cell around its own cells' points (one ring of ghost cells). So each piece sends the
+// cells around the corners of its own cells beyond the bounds, every piece puts all pieces' cells
+// together (points matched by position, which the exchanged smoothing makes equal bit for bit)
+// and runs the whole mesh's split on that union: it holds every cell beyond the bounds and each
+// cell a split reads, so it makes the whole mesh's splits. Each piece then keeps the edits of the
+// cells it holds. Only the cells around bad cells travel, and every piece gets all of them.
 #ifndef stmCoreInteriorEdgeSplit_h
 #define stmCoreInteriorEdgeSplit_h
 
 #include "Check/SimplexQuality.h"
 #include "Common/Execution.h"
 #include "Common/Status.h"
+#include "Smooth/SmoothingExchange.h"
 
 #include <algorithm>
 #include <array>
@@ -36,6 +48,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -52,6 +65,11 @@ struct InteriorEdgeSplitOptions
   /// edge between two other points has only the piece's own cells around it, and splitting it
   /// changes no facet that the piece shares with another.
   const std::uint8_t* HeldPoints = nullptr;
+  /// For the pieces of a distributed mesh (header comment): the exchange, and per cell non-zero
+  /// for a ghost cell (nullptr: none). The piece must hold every cell at a point of its own
+  /// cells. HeldPoints is then ignored: the pieces split the edges the whole mesh's run splits.
+  SmoothingExchange* Exchange = nullptr;
+  const std::uint8_t* GhostCells = nullptr;
 };
 
 template <int Dim>
@@ -83,12 +101,24 @@ public:
   const std::map<std::int64_t, CellIds>& GetChangedCells() const { return this->Changed; }
   const std::vector<CellIds>& GetAppendedCells() const { return this->Appended; }
   const std::vector<std::int64_t>& GetAppendedParents() const { return this->AppendedParents; }
-  /// Cells beyond the bounds before, and the worst badness before and after (1: at the bounds).
+  /// Cells beyond the bounds before, and the worst badness before and after (1: at the bounds);
+  /// for a piece, those of the whole mesh.
   std::int64_t GetNumberOfCandidates() const { return this->Candidates; }
   double GetWorstBadnessBefore() const { return this->WorstBefore; }
   double GetWorstBadnessAfter() const { return this->WorstAfter; }
 
 private:
+  using CandidateList = std::vector<std::pair<double, std::int64_t>>; // (-badness, cell)
+  template <class IdType, class Executor>
+  CandidateList FindCandidates(
+    const IdType* connectivity, std::int64_t numberOfCells, Executor& executor) const;
+  /// Sorts worst first, ties by the corners' coordinates (sorted), then by id.
+  void SortWorstFirst(CandidateList& candidates) const;
+  template <class IdType, class Executor>
+  Status SplitWhole(const IdType* connectivity, CandidateList candidates, Executor& executor);
+  template <class IdType, class Executor>
+  Status SplitPiece(const IdType* connectivity, Executor& executor);
+
   const double* Point(std::int64_t id) const
   {
     return id < this->NumberOfInputPoints
@@ -213,10 +243,27 @@ Status InteriorEdgeSplit<Dim>::Split(const double* points, std::int64_t numberOf
   this->NumberOfInputCells = numberOfCells;
   this->Materials = materials;
 
-  // The cells beyond the bounds, in parallel per chunk, then worst first.
+  if (options.Exchange)
+  {
+    return this->SplitPiece(connectivity, executor);
+  }
+  CandidateList candidates = this->FindCandidates(connectivity, numberOfCells, executor);
+  if (executor.ShouldAbort())
+  {
+    return Status::Aborted();
+  }
+  return this->SplitWhole(connectivity, std::move(candidates), executor);
+}
+
+template <int Dim>
+template <class IdType, class Executor>
+typename InteriorEdgeSplit<Dim>::CandidateList InteriorEdgeSplit<Dim>::FindCandidates(
+  const IdType* connectivity, std::int64_t numberOfCells, Executor& executor) const
+{
+  // In parallel per chunk, without the ghost cells.
   constexpr std::int64_t Chunk = 1 << 14;
   const std::int64_t chunks = (numberOfCells + Chunk - 1) / Chunk;
-  std::vector<std::vector<std::pair<double, std::int64_t>>> found(static_cast<std::size_t>(chunks));
+  std::vector<CandidateList> found(static_cast<std::size_t>(chunks));
   struct MeasureKernel
   {
     using Scratch = NoScratch;
@@ -224,13 +271,18 @@ Status InteriorEdgeSplit<Dim>::Split(const double* points, std::int64_t numberOf
     const IdType* Connectivity;
     std::int64_t Cells;
     double Cosine; // a little below the cosine of MinDihedralAngle
-    std::vector<std::pair<double, std::int64_t>>* Found;
+    CandidateList* Found;
     void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
     {
+      const std::uint8_t* ghosts = this->Self->Options.GhostCells;
       for (std::int64_t chunk = begin; chunk < end; ++chunk)
       {
         for (std::int64_t c = chunk * Chunk; c < std::min(this->Cells, (chunk + 1) * Chunk); ++c)
         {
+          if (ghosts && ghosts[c] != 0)
+          {
+            continue;
+          }
           // Most cells are well within the bounds, which the cosines show without an acos.
           const CellIds ids = IdsOf(this->Connectivity, c);
           const double* corners[Dim + 1];
@@ -261,19 +313,56 @@ Status InteriorEdgeSplit<Dim>::Split(const double* points, std::int64_t numberOf
     }
   };
   const double cosine =
-    std::cos(options.MinDihedralAngle * (3.14159265358979323846 / 180.0)) - 1e-9;
+    std::cos(this->Options.MinDihedralAngle * (3.14159265358979323846 / 180.0)) - 1e-9;
   MeasureKernel measure{ this, connectivity, numberOfCells, cosine, found.data() };
   executor.For(0, chunks, 1, measure);
-  if (executor.ShouldAbort())
-  {
-    return Status::Aborted();
-  }
-  std::vector<std::pair<double, std::int64_t>> candidates;
+  CandidateList candidates;
   for (const auto& list : found)
   {
     candidates.insert(candidates.end(), list.begin(), list.end());
   }
-  std::sort(candidates.begin(), candidates.end());
+  return candidates;
+}
+
+template <int Dim>
+void InteriorEdgeSplit<Dim>::SortWorstFirst(CandidateList& candidates) const
+{
+  // Ties are rare (symmetric meshes), but their order must be the same in a piece's union as in
+  // the whole mesh, whose ids differ.
+  auto cornersOf = [this](std::int64_t cell)
+  {
+    std::array<std::array<double, Dim>, Dim + 1> corners;
+    const CellIds ids = this->InputCell(cell);
+    for (int v = 0; v <= Dim; ++v)
+    {
+      std::copy(this->Point(ids[v]), this->Point(ids[v]) + Dim, corners[v].begin());
+    }
+    std::sort(corners.begin(), corners.end());
+    return corners;
+  };
+  std::sort(candidates.begin(), candidates.end(),
+    [&](const std::pair<double, std::int64_t>& x, const std::pair<double, std::int64_t>& y)
+    {
+      if (x.first != y.first)
+      {
+        return x.first < y.first;
+      }
+      const auto cx = cornersOf(x.second), cy = cornersOf(y.second);
+      return cx != cy ? cx < cy : x.second < y.second;
+    });
+}
+
+template <int Dim>
+template <class IdType, class Executor>
+Status InteriorEdgeSplit<Dim>::SplitWhole(
+  const IdType* connectivity, CandidateList candidates, Executor& executor)
+{
+  // The candidates' cells first: the ties' order reads their corners.
+  for (const auto& candidate : candidates)
+  {
+    this->InputCells[candidate.second] = IdsOf(connectivity, candidate.second);
+  }
+  this->SortWorstFirst(candidates);
   this->Candidates = static_cast<std::int64_t>(candidates.size());
   this->WorstBefore = candidates.empty() ? 0.0 : -candidates.front().first;
   this->WorstAfter = this->WorstBefore;
@@ -281,6 +370,8 @@ Status InteriorEdgeSplit<Dim>::Split(const double* points, std::int64_t numberOf
   {
     return Status::Ok();
   }
+  const std::int64_t numberOfPoints = this->NumberOfInputPoints;
+  const std::int64_t numberOfCells = this->NumberOfInputCells;
 
   // Incidence of the candidates' points (the only ends of edges that can be split; a new point
   // is tracked from its creation).
@@ -374,6 +465,241 @@ Status InteriorEdgeSplit<Dim>::Split(const double* points, std::int64_t numberOf
     const CellIds ids = this->Appended[c];
     this->WorstAfter =
       std::max(this->WorstAfter, this->Badness(ids, -1, nullptr, this->Orientation(ids)));
+  }
+  return Status::Ok();
+}
+
+template <int Dim>
+template <class IdType, class Executor>
+Status InteriorEdgeSplit<Dim>::SplitPiece(const IdType* connectivity, Executor& executor)
+{
+  const std::int64_t numberOfPoints = this->NumberOfInputPoints;
+  const std::int64_t numberOfCells = this->NumberOfInputCells;
+
+  // What this piece sends: whether it was aborted, the number of cells, and per cell around a
+  // corner of its own cells beyond the bounds its material and its corners' coordinates.
+  constexpr int CellWidth = 1 + (Dim + 1) * Dim;
+  const CandidateList own = this->FindCandidates(connectivity, numberOfCells, executor);
+  const bool aborted = executor.ShouldAbort();
+  std::vector<double> sent{ aborted ? 1.0 : 0.0, 0.0 };
+  if (!aborted && !own.empty())
+  {
+    std::vector<std::uint8_t> corner(static_cast<std::size_t>(numberOfPoints), 0);
+    for (const auto& candidate : own)
+    {
+      for (const std::int64_t id : IdsOf(connectivity, candidate.second))
+      {
+        corner[id] = 1;
+      }
+    }
+    for (std::int64_t c = 0; c < numberOfCells; ++c)
+    {
+      const CellIds ids = IdsOf(connectivity, c);
+      if (std::none_of(ids.begin(), ids.end(), [&](std::int64_t id) { return corner[id] != 0; }))
+      {
+        continue;
+      }
+      sent.push_back(static_cast<double>(this->Material(c)));
+      for (const std::int64_t id : ids)
+      {
+        sent.insert(sent.end(), this->Point(id), this->Point(id) + Dim);
+      }
+      sent[1] += 1.0;
+    }
+  }
+  const std::vector<double> all = this->Options.Exchange->Gather(sent);
+
+  // The union of the pieces' cells: points matched by position, each cell once, in the pieces'
+  // order (the same on every piece).
+  std::map<std::array<double, Dim>, std::int64_t> unionPointIds;
+  std::vector<double> unionPoints;
+  std::vector<std::int64_t> unionConnectivity, unionMaterials;
+  std::set<CellIds> unionCells; // by sorted corner ids
+  bool anyAborted = false;
+  for (std::size_t at = 0; at + 2 <= all.size();)
+  {
+    anyAborted = anyAborted || all[at] != 0.0;
+    const auto count = static_cast<std::size_t>(all[at + 1]);
+    at += 2;
+    if (count > (all.size() - at) / CellWidth)
+    {
+      return Status::Invalid("the pieces' cells for the edge splits arrived incomplete");
+    }
+    for (std::size_t k = 0; k < count; ++k, at += CellWidth)
+    {
+      CellIds ids;
+      for (int v = 0; v <= Dim; ++v)
+      {
+        std::array<double, Dim> position;
+        std::copy(
+          all.data() + at + 1 + v * Dim, all.data() + at + 1 + (v + 1) * Dim, position.begin());
+        const auto inserted =
+          unionPointIds.emplace(position, static_cast<std::int64_t>(unionPoints.size() / Dim));
+        if (inserted.second)
+        {
+          unionPoints.insert(unionPoints.end(), position.begin(), position.end());
+        }
+        ids[v] = inserted.first->second;
+      }
+      CellIds sorted = ids;
+      std::sort(sorted.begin(), sorted.end());
+      if (unionCells.insert(sorted).second)
+      {
+        unionConnectivity.insert(unionConnectivity.end(), ids.begin(), ids.end());
+        unionMaterials.push_back(static_cast<std::int64_t>(all[at]));
+      }
+    }
+  }
+  if (anyAborted)
+  {
+    return Status::Aborted();
+  }
+
+  // The whole mesh's splits, from the union.
+  InteriorEdgeSplitOptions wholeOptions;
+  wholeOptions.MaxConditionNumber = this->Options.MaxConditionNumber;
+  wholeOptions.MinDihedralAngle = this->Options.MinDihedralAngle;
+  InteriorEdgeSplit whole;
+  const std::int64_t unionInputPoints = static_cast<std::int64_t>(unionPoints.size() / Dim);
+  const Status status = whole.Split(unionPoints.data(), unionInputPoints, unionConnectivity.data(),
+    static_cast<std::int64_t>(unionMaterials.size()), unionMaterials.data(), wholeOptions,
+    executor);
+  if (!status.IsOk())
+  {
+    return status;
+  }
+  this->Candidates = whole.Candidates;
+  this->WorstBefore = whole.WorstBefore;
+  this->WorstAfter = whole.WorstAfter;
+  if (whole.NewPoints.empty())
+  {
+    return Status::Ok();
+  }
+
+  // This piece's points and cells among the union's. Every cell a split changes or splits from
+  // is among the changed input cells.
+  std::map<CellIds, std::int64_t> changedBySortedIds;
+  for (const auto& changed : whole.Changed)
+  {
+    CellIds sorted = whole.InputCell(changed.first);
+    std::sort(sorted.begin(), sorted.end());
+    changedBySortedIds.emplace(sorted, changed.first);
+  }
+  std::vector<std::int64_t> localPoint(static_cast<std::size_t>(unionInputPoints), -1);
+  std::vector<std::int64_t> unionPoint(static_cast<std::size_t>(numberOfPoints), -1);
+  for (std::int64_t p = 0; p < numberOfPoints; ++p)
+  {
+    std::array<double, Dim> position;
+    std::copy(this->Point(p), this->Point(p) + Dim, position.begin());
+    const auto found = unionPointIds.find(position);
+    if (found != unionPointIds.end())
+    {
+      unionPoint[p] = found->second;
+      localPoint[found->second] = p;
+    }
+  }
+  std::map<std::int64_t, std::int64_t> localCell;
+  for (std::int64_t c = 0; c < numberOfCells; ++c)
+  {
+    CellIds sorted = IdsOf(connectivity, c);
+    bool inUnion = true;
+    for (std::int64_t& id : sorted)
+    {
+      id = unionPoint[id];
+      inUnion = inUnion && id >= 0;
+    }
+    if (!inUnion)
+    {
+      continue;
+    }
+    std::sort(sorted.begin(), sorted.end());
+    const auto found = changedBySortedIds.find(sorted);
+    if (found != changedBySortedIds.end())
+    {
+      localCell[found->second] = c;
+    }
+  }
+
+  // The new points this piece's cells use, numbered after its points in the union's order; an
+  // end of a split edge stays in one of the two cells that replace each cell around it, so the
+  // ends of the piece's new points are the piece's too.
+  std::vector<std::int64_t> localNew(whole.NewPoints.size(), -1);
+  auto useNewPoints = [&](const CellIds& ids)
+  {
+    for (const std::int64_t id : ids)
+    {
+      if (id >= unionInputPoints)
+      {
+        localNew[static_cast<std::size_t>(id - unionInputPoints)] = 0;
+      }
+    }
+  };
+  for (const auto& changed : whole.Changed)
+  {
+    if (localCell.count(changed.first))
+    {
+      useNewPoints(changed.second);
+    }
+  }
+  for (std::size_t k = 0; k < whole.Appended.size(); ++k)
+  {
+    if (localCell.count(whole.AppendedParents[k]))
+    {
+      useNewPoints(whole.Appended[k]);
+    }
+  }
+  std::int64_t next = numberOfPoints;
+  for (std::int64_t& id : localNew)
+  {
+    id = id == 0 ? next++ : -1;
+  }
+  auto toLocal = [&](std::int64_t id)
+  {
+    return id < unionInputPoints ? localPoint[static_cast<std::size_t>(id)]
+                                 : localNew[static_cast<std::size_t>(id - unionInputPoints)];
+  };
+  bool complete = true;
+  auto cellToLocal = [&](const CellIds& ids)
+  {
+    CellIds local;
+    for (int v = 0; v <= Dim; ++v)
+    {
+      local[v] = toLocal(ids[v]);
+      complete = complete && local[v] >= 0;
+    }
+    return local;
+  };
+  for (std::size_t n = 0; n < whole.NewPoints.size(); ++n)
+  {
+    if (localNew[n] >= 0)
+    {
+      const NewPoint& point = whole.NewPoints[n];
+      this->NewPoints.push_back(NewPoint{ toLocal(point.A), toLocal(point.B), point.Position });
+      complete = complete && this->NewPoints.back().A >= 0 && this->NewPoints.back().B >= 0;
+    }
+  }
+  for (const auto& changed : whole.Changed)
+  {
+    const auto found = localCell.find(changed.first);
+    if (found != localCell.end())
+    {
+      this->Changed[found->second] = cellToLocal(changed.second);
+    }
+  }
+  for (std::size_t k = 0; k < whole.Appended.size(); ++k)
+  {
+    const auto found = localCell.find(whole.AppendedParents[k]);
+    if (found != localCell.end())
+    {
+      this->Appended.push_back(cellToLocal(whole.Appended[k]));
+      this->AppendedParents.push_back(found->second);
+    }
+  }
+  if (!complete)
+  {
+    *this = InteriorEdgeSplit();
+    return Status::Invalid("a split edge's cells are not all in the piece: it needs the ghost "
+                           "cells at its own cells' points");
   }
   return Status::Ok();
 }
