@@ -358,6 +358,16 @@ private:
     std::vector<Shape> Shapes;
   };
 
+  /// The root of `a`'s set in a union-find forest, halving the path on the way.
+  static std::int64_t FindRoot(std::vector<std::int64_t>& parent, std::int64_t a)
+  {
+    while (parent[a] != a)
+    {
+      parent[a] = parent[parent[a]];
+      a = parent[a];
+    }
+    return a;
+  }
   /// Small parts, once the interior layers and their edge neighbours are known (header comment);
   /// tips: the interior-layer points with at most one interior neighbour.
   template <class IdType>
@@ -1066,15 +1076,7 @@ void BoundarySmoother<Dim>::KeepSmallParts(
   // of its part); a part with a deeper interior point next to it is no small part.
   const std::int64_t n = this->NumberOfPoints;
   std::vector<std::int64_t> root(static_cast<std::size_t>(n), -1);
-  auto find = [&root](std::int64_t p)
-  {
-    while (root[p] != p)
-    {
-      root[p] = root[root[p]];
-      p = root[p];
-    }
-    return p;
-  };
+  auto find = [&root](std::int64_t p) { return FindRoot(root, p); };
   std::vector<std::int64_t> size(static_cast<std::size_t>(n), 0);
   std::vector<std::uint8_t> deep(static_cast<std::size_t>(n), 0);
   // A piece joins the edges, counts the points and finds the depth of the points it moves,
@@ -1214,15 +1216,7 @@ void BoundarySmoother<Dim>::JoinPartsOfPieces(const IdType* connectivity, Find& 
   std::vector<std::int64_t> parent;
   std::vector<std::int64_t> nodeSize;
   std::vector<std::uint8_t> nodeDeep;
-  auto findNode = [&parent](std::int64_t a)
-  {
-    while (parent[a] != a)
-    {
-      parent[a] = parent[parent[a]];
-      a = parent[a];
-    }
-    return a;
-  };
+  auto findNode = [&parent](std::int64_t a) { return FindRoot(parent, a); };
   std::map<std::array<double, Dim>, std::int64_t> nodeOfPoint;
   for (std::size_t at = 0; at + 2 <= all.size();)
   {
