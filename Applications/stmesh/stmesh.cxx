@@ -408,9 +408,9 @@ Arguments:
                         MPICH's or a PMIx mpiexec are recognised; a .pvtu output starts MPI
                         too). With P > 1 ranks every rank reads the image, meshes its share of
                         the root cells with two root cells of ghosts beyond it and drops the
-                        ghosts; the pieces are the one-rank mesh cell for cell up to the cut,
-                        and the smoothing holds the points of the ghost cells, so that pieces
-                        meet point on point but smooth less near their borders. Each rank uses
+                        ghosts; the pieces are the one-rank mesh cell for cell, the
+                        smoothing included: the ranks exchange the points they share in
+                        every part of it, the edge splits too. Each rank uses
                         the machine's cores divided by the ranks on it, at most the cores
                         the launcher bound it to, unless --threads or VTK_SMP_MAX_THREADS
                         says otherwise. Not with --grading or
