@@ -25,6 +25,7 @@ from vtkmodules.vtkParallelCore import vtkMultiProcessController
 controller = vtkMultiProcessController.GetGlobalController()
 rank, ranks = controller.GetLocalProcessId(), controller.GetNumberOfProcesses()
 T.check(ranks > 1, "run under mpiexec with several ranks, not %d" % ranks)
+T.exit_all_ranks_on_failure(ranks)
 temp = os.environ.get("STM_TEMP_DIR", ".")
 
 

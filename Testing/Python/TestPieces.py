@@ -27,6 +27,7 @@ import spacetreemesh  # noqa: E402 (after the plugin, like the other tests)
 controller = vtkMultiProcessController.GetGlobalController()
 ranks = controller.GetNumberOfProcesses() if controller else 1
 rank = controller.GetLocalProcessId() if controller else 0
+T.exit_all_ranks_on_failure(ranks)
 folder = T.env("STM_TEMP_DIR")
 labels_vti = os.path.join(folder, "labels.vti")
 labels_nii = os.path.join(folder, "labels.nii")

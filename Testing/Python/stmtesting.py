@@ -3,6 +3,8 @@
 Every test script imports this module; it is found through PYTHONPATH (set by CTest).
 """
 import os
+import sys
+import traceback
 
 import numpy as np
 
@@ -29,6 +31,22 @@ def env(name):
 
 def temp_path(file_name):
     return os.path.join(env("STM_TEMP_DIR"), file_name)
+
+
+def exit_all_ranks_on_failure(ranks):
+    """Under mpiexec with several ranks: an uncaught exception (a failed check) prints its
+    traceback and ends this process at once with exit code 1, which makes mpiexec stop the other
+    ranks. Otherwise they would wait at their next collective call until ctest's timeout."""
+    if ranks <= 1:
+        return
+
+    def print_and_exit(kind, value, trace):
+        traceback.print_exception(kind, value, trace)
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(1)
+
+    sys.excepthook = print_and_exit
 
 
 def check(condition, message):
