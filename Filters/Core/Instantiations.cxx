@@ -12,6 +12,7 @@
 #include "Smooth/BoundarySmooth.h"
 #include "Smooth/InteriorEdgeSplit.h"
 #include "Spacetree/SpacetreeBuild.h"
+#include "Spacetree/ThinPartPieces.h"
 #include "Spacetree/ThinParts.h"
 #include "Surface/InterfaceFacets.h"
 #include "Tessellate/SpacetreeTessellation.h"
@@ -48,6 +49,10 @@ void InstantiatePipeline()
   CheckSimplicialMesh<Dim>({}, {}, nullptr);
   std::vector<std::uint8_t> thin;
   ThinPartVoxels<Dim>(image, false, thin, executor);
+  ThinPartPiece<Dim> thinPiece;
+  thinPiece.Classify(
+    image, VoxelBox<Dim>(), VoxelBox<Dim>(), LatticeIndex<Dim>(), false, 0, executor);
+  thinPiece.Finish(thinPiece.Records(), thin, executor);
   std::vector<std::int8_t> indicator;
   BodyIndicator<Dim>(tree, indicator, executor);
   MarchingSimplices<Dim> cutter;

@@ -606,7 +606,7 @@ int stmBoundarySmooth::RequestData(
   output->Initialize();
   SmoothRequest request{ this, input, output, {},
     this->ProjectToFunction ? this->ImplicitFunction : nullptr, {}, {} };
-  request.Controller = stmPieceBorder::ControllerOfPieces(outputVector->GetInformationObject(0));
+  request.Controller = stmPieces::ControllerOfPieces(outputVector->GetInformationObject(0));
   auto fail = [&](const std::string& message)
   {
     output->Initialize();

@@ -4,6 +4,7 @@
 #include "stmPieces.h"
 #include "stmSMPExecutor.h"
 #include "stmSpacetreeData.h"
+#include "stmThinPartExchange.h"
 
 #include "Balance/SpacetreeGrading.h"
 #include "Spacetree/RefinementPlan.h"
@@ -610,12 +611,12 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
   return true;
 }
 
-/// Lays out the piece the output's request (outInfo) asks for, from the image's information
-/// (inInfo); false with `error` when it cannot.
+/// Lays out the piece the output's request (outInfo) asks for, or piece `number` of as many,
+/// from the image's information (inInfo); false with `error` when it cannot.
 bool LayOutRequestedPiece(stmImageToSpacetree* filter, vtkInformation* outInfo,
   vtkInformation* inInfo, bool cellLabels, const double* direction, PieceLayout& piece,
   std::string& error, const std::vector<stm::MaterialIndex>* wholeImage = nullptr,
-  stmSMPExecutor* executor = nullptr)
+  stmSMPExecutor* executor = nullptr, int number = -1)
 {
   using Pipeline = vtkStreamingDemandDrivenPipeline;
   piece = PieceLayout();
@@ -653,7 +654,10 @@ bool LayOutRequestedPiece(stmImageToSpacetree* filter, vtkInformation* outInfo,
   request.MaxCellSize = filter->GetMaxCellSize();
   piece.Dimension = geometry.Dimension;
   std::copy(geometry.ImageAxes, geometry.ImageAxes + 3, piece.ImageAxes);
-  const int number = stmPieces::RequestedPiece(outInfo);
+  if (number < 0)
+  {
+    number = stmPieces::RequestedPiece(outInfo);
+  }
   return geometry.Dimension == 3
     ? LayOutPiece<3>(request, geometry, pieces, number, wholeImage, executor, piece, error)
     : LayOutPiece<2>(request, geometry, pieces, number, wholeImage, executor, piece, error);
@@ -665,6 +669,195 @@ bool LabelsAreCellData(vtkAlgorithm* filter)
   vtkInformation* selection = filter->GetInputArrayInformation(0);
   return selection && selection->Has(vtkDataObject::FIELD_ASSOCIATION()) &&
     selection->Get(vtkDataObject::FIELD_ASSOCIATION()) == vtkDataObject::FIELD_ASSOCIATION_CELLS;
+}
+
+/// A piece's own voxels and those it reads for a classification in pieces (its ghost box grown by
+/// one voxel), per spacetree axis, counted from the whole image's first voxel.
+template <int Dim>
+void PieceVoxelBoxes(const PieceLayout& piece, stm::VoxelBox<Dim>& owned, stm::VoxelBox<Dim>& read)
+{
+  owned = stm::VoxelBox<Dim>();
+  read = stm::VoxelBox<Dim>();
+  if (piece.Empty)
+  {
+    return;
+  }
+  stm::LatticeIndex<Dim> dims;
+  stm::VoxelBox<Dim> ghost;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    dims[axis] = piece.WholeVoxelDims[piece.ImageAxes[axis]];
+    owned.Lower[axis] = piece.OwnedLower[axis] * piece.RootVoxels[axis];
+    owned.Upper[axis] =
+      std::min<long long>(dims[axis], piece.OwnedUpper[axis] * piece.RootVoxels[axis]);
+    ghost.Lower[axis] = piece.FirstVoxel[axis];
+    ghost.Upper[axis] = piece.FirstVoxel[axis] + piece.VoxelCount[axis];
+  }
+  read = ghost.Grown(1, dims);
+}
+
+/// The thin and minority-corner voxels of a piece classified with the other ranks' pieces, none
+/// of which has the whole image (stm::ThinPartPiece, stmThinPartExchange; collective, after a
+/// vote that found every rank ready). materials: the input's voxels (voxelDims, per image axis),
+/// whose first voxel is `inputFirst` voxels from the whole image's; thin and minorityCorner:
+/// flags on those voxels, set within the box the piece reads (empty vectors: none); false with
+/// `error` when this piece or another failed.
+template <int Dim>
+bool ClassifyVoxelsInPieces(vtkMultiProcessController* controller, stmImageToSpacetree* filter,
+  vtkInformation* outInfo, vtkInformation* inInfo, bool cellLabels, const double* direction,
+  const std::vector<stm::MaterialIndex>& materials, const int voxelDims[3],
+  const long long inputFirst[3], bool bodyOnly, stmSMPExecutor& executor,
+  std::vector<std::uint8_t>& thin, std::vector<std::uint8_t>& minorityCorner,
+  std::int64_t& wholeThinVoxels, std::string& error)
+{
+  const int ranks = controller->GetNumberOfProcesses();
+  const int rank = controller->GetLocalProcessId();
+  std::vector<stm::VoxelBox<Dim>> owned(static_cast<std::size_t>(ranks));
+  std::vector<stm::VoxelBox<Dim>> read(owned.size());
+  PieceLayout layout;
+  bool ok = true;
+  for (int r = 0; r < ranks && ok; ++r)
+  {
+    ok = LayOutRequestedPiece(
+      filter, outInfo, inInfo, cellLabels, direction, layout, error, nullptr, nullptr, r);
+    PieceVoxelBoxes<Dim>(layout, owned[r], read[r]);
+  }
+  stm::LatticeIndex<Dim> wholeDims;
+  long long first[3] = { 0, 0, 0 };
+  int count[3] = { 1, 1, 1 };
+  for (int axis = 0; axis < Dim && ok; ++axis)
+  {
+    const int imageAxis = layout.ImageAxes[axis];
+    wholeDims[axis] = layout.WholeVoxelDims[imageAxis];
+    first[imageAxis] = read[rank].Lower[axis] - inputFirst[imageAxis];
+    count[imageAxis] = static_cast<int>(read[rank].Upper[axis] - read[rank].Lower[axis]);
+    ok = owned[rank].IsEmpty() ||
+      (first[imageAxis] >= 0 && first[imageAxis] + count[imageAxis] <= voxelDims[imageAxis]);
+    if (!ok)
+    {
+      error = "the image's extent does not hold the voxels the piece reads to classify its thin "
+              "parts";
+    }
+  }
+  stm::ThinPartPiece<Dim> piece;
+  std::vector<stm::MaterialIndex> readMaterials;
+  stm::MaterialImage<Dim> readImage;
+  if (ok && !owned[rank].IsEmpty())
+  {
+    readMaterials = CropVoxels(materials, voxelDims, first, count);
+    readImage.Dimensions = read[rank].GetDimensions();
+    readImage.Values = readMaterials.data();
+    const stm::Status classified =
+      piece.Classify(readImage, read[rank], owned[rank], wholeDims, bodyOnly, rank, executor);
+    if (!classified.IsOk())
+    {
+      error = classified.GetMessage();
+      ok = false;
+    }
+  }
+  if (!stmThinPartExchange::AllOk(controller, ok))
+  {
+    error = ok ? "another piece failed to classify its thin parts" : error;
+    return false;
+  }
+  std::vector<std::uint8_t> readThin;
+  const stm::Status exchanged = stmThinPartExchange::Exchange<Dim>(
+    controller, piece, owned, read, readThin, wholeThinVoxels, executor);
+  ok = exchanged.IsOk();
+  if (!stmThinPartExchange::AllOk(controller, ok))
+  {
+    error = ok ? "another piece failed to classify its thin parts" : exchanged.GetMessage();
+    return false;
+  }
+  thin.clear();
+  minorityCorner.clear();
+  if (owned[rank].IsEmpty())
+  {
+    return true;
+  }
+  std::vector<std::uint8_t> readCorners;
+  const stm::Status cornered =
+    stm::MinorityCornerVoxels<Dim>(readImage, bodyOnly, readCorners, executor);
+  if (!cornered.IsOk())
+  {
+    error = cornered.GetMessage();
+    return false;
+  }
+  // Back onto the input's voxels.
+  const std::size_t voxels = static_cast<std::size_t>(voxelDims[0]) * voxelDims[1] * voxelDims[2];
+  thin.assign(voxels, 0);
+  minorityCorner.assign(voxels, 0);
+  for (std::int64_t row = 0; row < static_cast<std::int64_t>(count[1]) * count[2]; ++row)
+  {
+    const long long y = first[1] + row % count[1];
+    const long long z = first[2] + row / count[1];
+    const std::size_t to =
+      static_cast<std::size_t>((z * voxelDims[1] + y) * voxelDims[0] + first[0]);
+    std::copy_n(readThin.begin() + row * count[0], count[0], thin.begin() + to);
+    std::copy_n(readCorners.begin() + row * count[0], count[0], minorityCorner.begin() + to);
+  }
+  return !executor.ShouldAbort();
+}
+
+/// A rank's part in the classification in pieces when it has no voxels to classify (collective,
+/// after the vote): it sends and receives nothing but the records and the sums.
+void ClassifyNoVoxels(vtkMultiProcessController* controller, stmSMPExecutor& executor)
+{
+  stmThinPartExchange::AllOk(controller, true);
+  stm::ThinPartPiece<3> piece;
+  const std::vector<stm::VoxelBox<3>> none(
+    static_cast<std::size_t>(controller->GetNumberOfProcesses()));
+  std::vector<std::uint8_t> thin;
+  std::int64_t wholeThinVoxels = 0;
+  const stm::Status exchanged = stmThinPartExchange::Exchange<3>(
+    controller, piece, none, none, thin, wholeThinVoxels, executor);
+  stmThinPartExchange::AllOk(controller, exchanged.IsOk());
+}
+
+/// What ClassifyTogether did.
+enum class Classification
+{
+  WholeImages, ///< every rank has the whole image: each classifies it alone
+  Together,    ///< the ranks classified their pieces together
+  Failed       ///< this rank or another failed (or aborted)
+};
+
+/// The vote of the ranks that mesh their own pieces with thin-part refinement and, unless every
+/// rank has the whole image, ClassifyVoxelsInPieces (collective). The input's voxels
+/// (`materials`, voxelDims) have the extent `extent` of the image whose piece `piece` is.
+Classification ClassifyTogether(stmThinPartExchange::Vote& vote, stmImageToSpacetree* filter,
+  vtkInformation* outInfo, vtkInformation* inInfo, bool cellLabels, const double* direction,
+  const PieceLayout& piece, const int extent[6], const int voxelDims[3],
+  const std::vector<stm::MaterialIndex>& materials, stmSMPExecutor& executor,
+  std::vector<std::uint8_t>& thin, std::vector<std::uint8_t>& minorityCorner,
+  std::int64_t& wholeThinVoxels, std::string& error)
+{
+  bool whole = true;
+  long long inputFirst[3];
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    inputFirst[axis] = extent[2 * axis] - piece.WholeExtent[2 * axis];
+    whole = whole && voxelDims[axis] == piece.WholeVoxelDims[axis] && inputFirst[axis] == 0;
+  }
+  vote.Take(true, whole);
+  if (vote.GetAllWhole())
+  {
+    return Classification::WholeImages;
+  }
+  if (!vote.GetAllReady())
+  {
+    error = "another piece failed before it classified its thin parts";
+    return Classification::Failed;
+  }
+  const bool bodyOnly = filter->GetThinPartRefinement() == stmImageToSpacetree::THIN_BODY_PARTS;
+  const bool classified = piece.Dimension == 3
+    ? ClassifyVoxelsInPieces<3>(vote.GetController(), filter, outInfo, inInfo, cellLabels,
+        direction, materials, voxelDims, inputFirst, bodyOnly, executor, thin, minorityCorner,
+        wholeThinVoxels, error)
+    : ClassifyVoxelsInPieces<2>(vote.GetController(), filter, outInfo, inInfo, cellLabels,
+        direction, materials, voxelDims, inputFirst, bodyOnly, executor, thin, minorityCorner,
+        wholeThinVoxels, error);
+  return classified ? Classification::Together : Classification::Failed;
 }
 } // namespace
 
@@ -864,19 +1057,25 @@ int stmImageToSpacetree::RequestUpdateExtent(
   {
     std::copy(piece.WholeExtent, piece.WholeExtent + 6, extent);
   }
-  // Thin-part refinement needs the whole image: a part is thin by its whole component, which
-  // may reach beyond the ghost box, and whether any voxel of the image is thin decides the
-  // lattice (RequestData classifies the voxels before it crops them).
-  if (!piece.Empty && this->ThinPartRefinement == NO_THIN_PARTS)
+  // Thin-part refinement needs more than the ghost box: a part is thin by its whole component,
+  // which may reach beyond it, and whether any voxel of the image is thin decides the lattice.
+  // When every rank meshes its own piece, the ranks classify the voxels together, each reading
+  // its ghost box grown by one voxel (ClassifyVoxelsInPieces); a pipeline that asks one process
+  // for several pieces gets the whole image, which RequestData classifies before it crops.
+  const bool classifyTogether =
+    this->ThinPartRefinement != NO_THIN_PARTS && stmPieces::ControllerOfPieces(outInfo) != nullptr;
+  if (!piece.Empty && (this->ThinPartRefinement == NO_THIN_PARTS || classifyTogether))
   {
+    const int grown = classifyTogether ? 1 : 0;
     for (int i = 0; i < piece.Dimension; ++i)
     {
       const int axis = piece.ImageAxes[i];
-      extent[2 * axis] = piece.WholeExtent[2 * axis] + static_cast<int>(piece.FirstVoxel[i]);
+      const int first = piece.WholeExtent[2 * axis] + static_cast<int>(piece.FirstVoxel[i]);
+      extent[2 * axis] = std::max(piece.WholeExtent[2 * axis], first - grown);
       // One point more than point labels need: cell labels, which an unset array selection
       // may turn out to be, need it (RequestData crops the extra voxels away).
       extent[2 * axis + 1] = std::min(
-        piece.WholeExtent[2 * axis + 1], extent[2 * axis] + static_cast<int>(piece.VoxelCount[i]));
+        piece.WholeExtent[2 * axis + 1], first + static_cast<int>(piece.VoxelCount[i]) + grown);
     }
   }
   stmPieces::RequestImageExtent(inInfo, extent);
@@ -900,6 +1099,11 @@ int stmImageToSpacetree::RequestData(
     vtkErrorMacro("ImageToSpacetree needs a vtkImageData input.");
     return 0;
   }
+  // With thin-part refinement every rank that meshes its own piece votes whether it can classify
+  // its voxels with the others, also when it returns before (the vote's destructor).
+  stmThinPartExchange::Vote vote(splitting && this->ThinPartRefinement != NO_THIN_PARTS
+      ? stmPieces::ControllerOfPieces(outInfo)
+      : nullptr);
   PieceLayout piece;
   const bool assumedCellLabels = LabelsAreCellData(this);
   if (splitting)
@@ -914,6 +1118,15 @@ int stmImageToSpacetree::RequestData(
     }
     if (piece.Empty)
     {
+      if (vote.GetController())
+      {
+        vote.Take(true, true);
+        if (vote.GetAllReady() && !vote.GetAllWhole())
+        {
+          stmSMPExecutor executor(this);
+          ClassifyNoVoxels(vote.GetController(), executor);
+        }
+      }
       output->Initialize(); // more pieces than root cells
       return 1;
     }
@@ -1082,6 +1295,24 @@ int stmImageToSpacetree::RequestData(
     {
       if (splitting)
       {
+        if (vote.GetController())
+        {
+          // The other pieces may read this piece's background voxels to classify their own.
+          const std::vector<stm::MaterialIndex> background(
+            static_cast<std::size_t>(labels->GetNumberOfTuples()), stm::BackgroundMaterial);
+          std::vector<std::uint8_t> thin, minorityCorner;
+          std::int64_t wholeThinVoxels = 0;
+          std::string error;
+          stmSMPExecutor executor(this);
+          if (ClassifyTogether(vote, this, outInfo, inputVector[0]->GetInformationObject(0),
+                cellLabels, direction, piece, extent, voxelDims, background, executor, thin,
+                minorityCorner, wholeThinVoxels, error) == Classification::Failed &&
+            !this->GetAbortExecute())
+          {
+            vtkErrorMacro("ImageToSpacetree failed: " << error);
+            return 0;
+          }
+        }
         output->Initialize(); // the body lies in other pieces
         return 1;
       }
@@ -1269,9 +1500,29 @@ int stmImageToSpacetree::RequestData(
     geometry.IsPiece = true;
     std::vector<std::uint8_t> thin;
     std::vector<std::uint8_t> minorityCorner;
-    if (request.ThinParts != NO_THIN_PARTS)
+    Classification classification = Classification::WholeImages;
+    if (vote.GetController())
     {
-      // RequestUpdateExtent asked for the whole image: a thin part is one by its whole component.
+      stmSMPExecutor classifier(this);
+      classifier.SetProgressRange(0.25, 0.4);
+      std::string classifyError;
+      classification = ClassifyTogether(vote, this, outInfo,
+        inputVector[0]->GetInformationObject(0), cellLabels, direction, piece, extent, voxelDims,
+        materials, classifier, thin, minorityCorner, request.WholeThinVoxels, classifyError);
+      if (classification == Classification::Failed)
+      {
+        if (!this->GetAbortExecute())
+        {
+          vtkErrorMacro("ImageToSpacetree failed: " << classifyError);
+        }
+        return this->GetAbortExecute() ? 1 : 0;
+      }
+      request.VoxelClassesGiven = classification == Classification::Together;
+    }
+    if (request.ThinParts != NO_THIN_PARTS && classification == Classification::WholeImages)
+    {
+      // A pipeline that asks one process for several pieces, or every rank given the whole image:
+      // a thin part is one by its whole component.
       stmSMPExecutor classifier(this);
       classifier.SetProgressRange(0.25, 0.4);
       std::string classifyError;

@@ -243,8 +243,9 @@ protected:
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
   /// Under MPI: the whole image on piece 0, nothing on the others (stmPieces.h); with
-  /// SplitIntoPieces, the voxels of the piece's root cells and its ghost layer, or with
-  /// ThinPartRefinement the whole image (thin parts are classified on it before the crop).
+  /// SplitIntoPieces, the voxels of the piece's root cells and its ghost layer; with
+  /// ThinPartRefinement grown by one voxel when every rank meshes its own piece (the ranks
+  /// classify the thin parts together), else the whole image (classified before the crop).
   int RequestUpdateExtent(vtkInformation* request, vtkInformationVector** inputVector,
     vtkInformationVector* outputVector) override;
   int RequestData(vtkInformation* request, vtkInformationVector** inputVector,

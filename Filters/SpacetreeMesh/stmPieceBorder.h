@@ -48,24 +48,6 @@
 
 namespace stmPieceBorder
 {
-/// The global controller when the request on `info` (the output's information) asks for piece
-/// k of n on rank k of n ranks, n > 1: each rank then meshes its own piece. Null otherwise
-/// (one process, or a pipeline that asks one rank for several pieces).
-inline vtkMultiProcessController* ControllerOfPieces(vtkInformation* info)
-{
-  using Pipeline = vtkStreamingDemandDrivenPipeline;
-  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
-  if (!controller || controller->GetNumberOfProcesses() < 2 || !info ||
-    !info->Has(Pipeline::UPDATE_NUMBER_OF_PIECES()) || !info->Has(Pipeline::UPDATE_PIECE_NUMBER()))
-  {
-    return nullptr;
-  }
-  return info->Get(Pipeline::UPDATE_NUMBER_OF_PIECES()) == controller->GetNumberOfProcesses() &&
-      info->Get(Pipeline::UPDATE_PIECE_NUMBER()) == controller->GetLocalProcessId()
-    ? controller
-    : nullptr;
-}
-
 /// A point's name in the exchange: its position before the smoothing.
 using Key = std::array<double, 3>;
 

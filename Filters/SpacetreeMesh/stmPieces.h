@@ -27,6 +27,7 @@
 #include "vtkFieldData.h"
 #include "vtkInformation.h"
 #include "vtkIntArray.h"
+#include "vtkMultiProcessController.h"
 #include "vtkNew.h"
 #include "vtkSmartPointer.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
@@ -37,6 +38,24 @@
 
 namespace stmPieces
 {
+/// The global controller when the request on `info` (the output's information) asks for piece
+/// k of n on rank k of n ranks, n > 1: each rank then meshes its own piece. Null otherwise
+/// (one process, or a pipeline that asks one rank for several pieces).
+inline vtkMultiProcessController* ControllerOfPieces(vtkInformation* info)
+{
+  using Pipeline = vtkStreamingDemandDrivenPipeline;
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  if (!controller || controller->GetNumberOfProcesses() < 2 || !info ||
+    !info->Has(Pipeline::UPDATE_NUMBER_OF_PIECES()) || !info->Has(Pipeline::UPDATE_PIECE_NUMBER()))
+  {
+    return nullptr;
+  }
+  return info->Get(Pipeline::UPDATE_NUMBER_OF_PIECES()) == controller->GetNumberOfProcesses() &&
+      info->Get(Pipeline::UPDATE_PIECE_NUMBER()) == controller->GetLocalProcessId()
+    ? controller
+    : nullptr;
+}
+
 /// The piece a request asks for (0 when it names none).
 inline int RequestedPiece(vtkInformation* info)
 {

@@ -123,12 +123,18 @@ bool RowWithin(std::int64_t linear, const LatticeIndex<Dim>& dims)
   }
   return within;
 }
-} // namespace detail
 
-/// thin: one flag per voxel (axis 0 fastest), 1 for a thin voxel.
+/// centreKept: 1 where the labels function keeps a voxel's material at its centre, 0 where not;
+/// UniformlyKept where the 3^d voxels around it are all of its material (no other test needed).
+/// componentKept: 1 or UniformlyKept where the voxel's face-connected component has a voxel that
+/// keeps it, 2 where it has none.
+constexpr std::uint8_t UniformlyKept = 3;
+
+/// The local tests: the strict majority material at each corner (-1 for none; corners of a
+/// lattice one larger than the image) and centreKept (see above), per voxel.
 template <int Dim, class Executor>
-Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
-  std::vector<std::uint8_t>& thin, Executor& executor)
+Status ThinPartTests(const MaterialImage<Dim>& image, bool bodyOnly,
+  std::vector<std::int32_t>& majority, std::vector<std::uint8_t>& centreKept, Executor& executor)
 {
   std::int64_t voxelCount = 0;
   const Status valid = detail::CountImageVoxels<Dim>(image, voxelCount);
@@ -203,7 +209,7 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
   const std::int64_t rowGrain = std::max<std::int64_t>(1, (1 << 14) / rowLength);
 
   // The strict majority material of the voxels around each corner, or -1.
-  std::vector<std::int32_t> majority(static_cast<std::size_t>(cornerCount), -1);
+  majority.assign(static_cast<std::size_t>(cornerCount), -1);
   struct MajorityKernel
   {
     using Scratch = NoScratch;
@@ -300,10 +306,8 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
     return Status::Aborted();
   }
 
-  // Whether the labels function keeps each voxel's material at its centre: 1, or Uniform where
-  // the 3^d voxels around it are all of its material.
-  constexpr std::uint8_t Uniform = 3;
-  std::vector<std::uint8_t> centreKept(static_cast<std::size_t>(voxelCount), 0);
+  // Whether the labels function keeps each voxel's material at its centre.
+  centreKept.assign(static_cast<std::size_t>(voxelCount), 0);
   struct CentreKernel
   {
     using Scratch = NoScratch;
@@ -338,7 +342,7 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
         {
           const bool uniform = same[i - 1] && same[i] && same[i + 1] &&
             values[i - 1] == values[i] && values[i + 1] == values[i];
-          this->Kept[start + i] = uniform ? Uniform : this->Count(start + i, true);
+          this->Kept[start + i] = uniform ? UniformlyKept : this->Count(start + i, true);
         }
         this->Kept[start + length - 1] = this->Count(start + length - 1, false);
       }
@@ -383,12 +387,24 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
   {
     return Status::Aborted();
   }
+  return Status::Ok();
+}
+
+/// centreKept turned into componentKept (see UniformlyKept) for a whole image.
+template <int Dim>
+void KeepWholeComponents(
+  const MaterialImage<Dim>& image, bool bodyOnly, std::vector<std::uint8_t>& kept)
+{
+  auto materialAt = [&](const LatticeIndex<Dim>& voxel) -> std::int32_t
+  { return MaterialOrBodyAt<Dim>(image, bodyOnly, voxel); };
+  auto unlinear = [](std::int64_t linear, const LatticeIndex<Dim>& dims)
+  { return UnlinearIndex<Dim>(linear, dims); };
 
   // Whether each voxel's face-connected component has a voxel that keeps it: a search from each
   // voxel that does not, stopped at the first voxel that does (most components reach one
   // within a step or two; only components that have none are walked whole).
   // 1 or Uniform: kept, 0: unknown, 2: not kept.
-  std::vector<std::uint8_t> componentKept = std::move(centreKept);
+  std::vector<std::uint8_t>& componentKept = kept;
   std::vector<std::int64_t> visited, stack;
   for (auto unknown = std::find(componentKept.begin(), componentKept.end(), 0);
        unknown != componentKept.end();
@@ -416,7 +432,7 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
             continue;
           }
           const std::int64_t index = LinearIndex<Dim>(neighbour, image.Dimensions);
-          if (componentKept[index] == 1 || componentKept[index] == Uniform)
+          if (componentKept[index] == 1 || componentKept[index] == UniformlyKept)
           {
             found = true;
             break;
@@ -435,6 +451,26 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
       componentKept[index] = found ? 1 : 2;
     }
   }
+}
+
+/// The thin flags from the tests' majorities and componentKept.
+template <int Dim, class Executor>
+Status MarkThinVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
+  const std::vector<std::int32_t>& majority, const std::vector<std::uint8_t>& componentKept,
+  std::vector<std::uint8_t>& thin, Executor& executor)
+{
+  std::int64_t voxelCount = 1;
+  LatticeIndex<Dim> corners;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    voxelCount *= image.Dimensions[axis];
+    corners[axis] = image.Dimensions[axis] + 1;
+  }
+  constexpr int Around = 1 << Dim;
+  auto materialAt = [&](const LatticeIndex<Dim>& voxel) -> std::int32_t
+  { return MaterialOrBodyAt<Dim>(image, bodyOnly, voxel); };
+  auto unlinear = [](std::int64_t linear, const LatticeIndex<Dim>& dims)
+  { return UnlinearIndex<Dim>(linear, dims); };
 
   thin.assign(static_cast<std::size_t>(voxelCount), 0);
   struct ThinKernel
@@ -453,7 +489,7 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
       {
         // One material all around: its centre keeps it, and so does every corner of it (every
         // voxel around them is one of the 3^d).
-        this->Thin[v] = this->ComponentKept[v] == Uniform ? 0 : this->Test(v);
+        this->Thin[v] = this->ComponentKept[v] == UniformlyKept ? 0 : this->Test(v);
       }
     }
     std::uint8_t Test(std::int64_t v) const
@@ -501,6 +537,23 @@ Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
     componentKept.data(), thin.data() };
   executor.For(0, voxelCount, 1 << 14, thinKernel);
   return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
+}
+} // namespace detail
+
+/// thin: one flag per voxel (axis 0 fastest), 1 for a thin voxel.
+template <int Dim, class Executor>
+Status ThinPartVoxels(const MaterialImage<Dim>& image, bool bodyOnly,
+  std::vector<std::uint8_t>& thin, Executor& executor)
+{
+  std::vector<std::int32_t> majority;
+  std::vector<std::uint8_t> kept;
+  const Status tested = detail::ThinPartTests<Dim>(image, bodyOnly, majority, kept, executor);
+  if (!tested.IsOk())
+  {
+    return tested;
+  }
+  detail::KeepWholeComponents<Dim>(image, bodyOnly, kept);
+  return detail::MarkThinVoxels<Dim>(image, bodyOnly, majority, kept, thin, executor);
 }
 
 /// Voxels at a minority corner: a voxel of material m with a corner at which m holds less than

@@ -11,6 +11,7 @@
 #include "Common/Determinant.h"
 #include "Cut/MultiMaterialCut.h"
 #include "Smooth/BoundarySmooth.h"
+#include "Spacetree/ThinPartPieces.h"
 #include "Spacetree/ThinParts.h"
 
 #include <gtest/gtest.h>
@@ -615,6 +616,173 @@ TYPED_TEST(ThinPartsTest, SmoothingKeepsAVoxelCentreOfEveryComponent)
             << " keeping small parts, " << lost[false] << " without\n";
   EXPECT_EQ(lost[true], 0);
   EXPECT_GT(lost[false], 0);
+}
+
+/// The voxels of `box` of an image.
+template <int D>
+LabelImage<D> CropImage(const LabelImage<D>& image, const stm::VoxelBox<D>& box)
+{
+  LabelImage<D> crop(box.GetDimensions());
+  box.ForEach([&](std::int64_t i, const stm::LatticeIndex<D>& voxel)
+    { crop.GetValues()[static_cast<std::size_t>(i)] = image.At(voxel); });
+  return crop;
+}
+
+/// Each piece's flags on its box grown by `ghosts` voxels, classified in pieces that own the
+/// boxes between `cuts` (per axis, the first voxels of the second and later pieces; one piece
+/// more, owning nothing) and read their boxes grown by ghosts + 1 voxels; with `join` off the
+/// pieces skip step 2 (a mutation: each component is then judged by its parts alone).
+template <int D>
+std::vector<std::vector<std::uint8_t>> ClassifyInPieces(const LabelImage<D>& image, bool bodyOnly,
+  const std::array<std::vector<std::int64_t>, D>& cuts, int ghosts, bool join,
+  std::vector<stm::VoxelBox<D>>& ghostBoxes, std::int64_t& ownThinVoxels)
+{
+  const stm::LatticeIndex<D> dims = image.GetDimensions();
+  std::vector<stm::VoxelBox<D>> owned(1);
+  for (int axis = 0; axis < D; ++axis)
+  {
+    owned[0].Upper[axis] = dims[axis];
+  }
+  for (int axis = 0; axis < D; ++axis)
+  {
+    std::vector<stm::VoxelBox<D>> split;
+    for (const stm::VoxelBox<D>& box : owned)
+    {
+      std::int64_t lower = 0;
+      for (std::size_t k = 0; k <= cuts[axis].size(); ++k)
+      {
+        stm::VoxelBox<D> part = box;
+        part.Lower[axis] = lower;
+        part.Upper[axis] = k < cuts[axis].size() ? cuts[axis][k] : dims[axis];
+        lower = part.Upper[axis];
+        split.push_back(part);
+      }
+    }
+    owned = split;
+  }
+  owned.push_back(stm::VoxelBox<D>()); // a piece with no voxels
+  const int pieces = static_cast<int>(owned.size());
+  stm::SequentialExecutor executor;
+  std::vector<LabelImage<D>> crops;
+  std::vector<stm::VoxelBox<D>> read;
+  std::vector<stm::ThinPartPiece<D>> classifiers(static_cast<std::size_t>(pieces));
+  ghostBoxes.clear();
+  for (int p = 0; p < pieces; ++p)
+  {
+    read.push_back(owned[p].IsEmpty() ? owned[p] : owned[p].Grown(ghosts + 1, dims));
+    ghostBoxes.push_back(owned[p].IsEmpty() ? owned[p] : owned[p].Grown(ghosts, dims));
+    crops.push_back(CropImage<D>(image, read.back()));
+    EXPECT_TRUE(classifiers[p]
+                  .Classify(crops.back().View(), read[p], owned[p], dims, bodyOnly, p, executor)
+                  .IsOk());
+  }
+  for (int from = 0; from < pieces && join; ++from)
+  {
+    for (int to = 0; to < pieces; ++to)
+    {
+      const stm::VoxelBox<D> box = read[from].Intersection(owned[to]);
+      if (from != to && !box.IsEmpty())
+      {
+        EXPECT_TRUE(classifiers[to].Join(from, box, classifiers[from].ComponentsIn(box)).IsOk());
+      }
+    }
+  }
+  // The records in reverse order of the pieces: the result may not depend on it.
+  std::vector<std::int64_t> records;
+  for (int p = pieces - 1; p >= 0; --p)
+  {
+    const std::vector<std::int64_t> own = classifiers[p].Records();
+    records.insert(records.end(), own.begin(), own.end());
+  }
+  std::vector<std::vector<std::uint8_t>> flags;
+  ownThinVoxels = 0;
+  for (int p = 0; p < pieces; ++p)
+  {
+    std::vector<std::uint8_t> thin;
+    EXPECT_TRUE(classifiers[p].Finish(records, thin, executor).IsOk());
+    ownThinVoxels += classifiers[p].CountOwnThinVoxels(thin);
+    std::vector<std::uint8_t> onGhostBox;
+    ghostBoxes[p].ForEach(
+      [&](std::int64_t, const stm::LatticeIndex<D>& voxel)
+      {
+        std::int64_t linear = 0;
+        for (int axis = D - 1; axis >= 0; --axis)
+        {
+          linear = linear * (read[p].Upper[axis] - read[p].Lower[axis]) + voxel[axis] -
+            read[p].Lower[axis];
+        }
+        onGhostBox.push_back(thin[static_cast<std::size_t>(linear)]);
+      });
+    flags.push_back(onGhostBox);
+  }
+  return flags;
+}
+
+// Pieces that each read a box of the image classify the voxels of their ghost boxes as the whole
+// image does, though components cross several pieces; without the joins of step 2 they do not.
+TYPED_TEST(ThinPartsTest, PiecesClassifyAsTheWholeImage)
+{
+  constexpr int D = TypeParam::value;
+  std::array<std::vector<std::int64_t>, D> cuts;
+  cuts[0] = { 7, 15 };
+  cuts[1] = { 9 };
+  std::int64_t differencesWithoutJoins = 0;
+  for (const unsigned seed : { 3u, 21u, 77u })
+  {
+    const LabelImage<D> image = MakeRandomImage<D>(FirstExtents<D>({ 23, 19, 17 }), seed, 4, 8, 30);
+    for (const bool bodyOnly : { false, true })
+    {
+      const std::vector<std::uint8_t> whole = Thin<D>(image, bodyOnly);
+      for (const int ghosts : { 0, 2 })
+      {
+        std::vector<stm::VoxelBox<D>> ghostBoxes;
+        std::int64_t ownThin = 0, ownThinWithoutJoins = 0;
+        const auto pieces =
+          ClassifyInPieces<D>(image, bodyOnly, cuts, ghosts, true, ghostBoxes, ownThin);
+        const auto unjoined = ClassifyInPieces<D>(
+          image, bodyOnly, cuts, ghosts, false, ghostBoxes, ownThinWithoutJoins);
+        ASSERT_EQ(pieces.size(), 3 * 2 + 1u);
+        for (std::size_t p = 0; p < pieces.size(); ++p)
+        {
+          std::vector<std::uint8_t> expected;
+          ghostBoxes[p].ForEach([&](std::int64_t, const stm::LatticeIndex<D>& voxel)
+            { expected.push_back(whole[stm::LinearIndex<D>(voxel, image.GetDimensions())]); });
+          EXPECT_EQ(pieces[p], expected) << "seed " << seed << ", body only " << bodyOnly
+                                         << ", ghosts " << ghosts << ", piece " << p;
+          for (std::size_t v = 0; v < expected.size(); ++v)
+          {
+            differencesWithoutJoins += unjoined[p][v] != expected[v] ? 1 : 0;
+          }
+        }
+        EXPECT_EQ(ownThin, Count<D>(whole));
+      }
+    }
+  }
+  EXPECT_GT(differencesWithoutJoins, 0);
+}
+
+TEST(ThinParts, PiecesRejectBoxesThatDoNotFit)
+{
+  stm::SequentialExecutor executor;
+  LabelImage<2> image(stm::LatticeIndex<2>{ 8, 8 });
+  stm::VoxelBox<2> owned{ { 0, 0 }, { 4, 8 } };
+  stm::VoxelBox<2> read{ { 0, 0 }, { 4, 8 } }; // not grown by a voxel towards the other piece
+  stm::ThinPartPiece<2> piece;
+  const LabelImage<2> crop = CropImage<2>(image, read);
+  EXPECT_FALSE(
+    piece.Classify(crop.View(), read, owned, image.GetDimensions(), false, 0, executor).IsOk());
+  read.Upper[0] = 5;
+  EXPECT_FALSE(piece.Classify(crop.View(), read, owned, image.GetDimensions(), false, 0, executor)
+                 .IsOk()); // the image is not the box's size
+  const LabelImage<2> grown = CropImage<2>(image, read);
+  ASSERT_TRUE(
+    piece.Classify(grown.View(), read, owned, image.GetDimensions(), false, 0, executor).IsOk());
+  const stm::VoxelBox<2> notOwn{ { 4, 0 }, { 5, 8 } };
+  EXPECT_FALSE(piece.Join(1, notOwn, std::vector<std::int32_t>(8, 0)).IsOk());
+  const stm::VoxelBox<2> own{ { 3, 0 }, { 4, 8 } };
+  EXPECT_FALSE(piece.Join(1, own, std::vector<std::int32_t>(7, 0)).IsOk());
+  std::vector<std::uint8_t> thin;
+  EXPECT_FALSE(piece.Finish(std::vector<std::int64_t>(3, 0), thin, executor).IsOk());
 }
 
 TEST(ThinParts, RejectsBadImages)
