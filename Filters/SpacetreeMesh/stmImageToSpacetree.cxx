@@ -309,7 +309,13 @@ bool LayOutPiece(const RefinementRequest& request, const stmSpacetreeGeometry& g
   {
     owned = stm::PieceRootBox<Dim>(rootDims, pieces, piece);
   }
-  const stm::RootBox<Dim> ghost = stm::GhostRootBox<Dim>(owned, rootDims);
+  stm::LatticeIndex<Dim> rootVoxels;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    rootVoxels[axis] = layout.RootVoxels[axis];
+  }
+  const stm::RootBox<Dim> ghost =
+    stm::GhostRootBox<Dim>(owned, rootDims, stm::GhostRootLayersFor<Dim>(rootVoxels));
   layout.Empty = owned.IsEmpty();
   for (int axis = 0; axis < Dim && !layout.Empty; ++axis)
   {
@@ -1598,7 +1604,7 @@ int stmImageToSpacetree::RequestData(
     if (std::none_of(materials.begin(), materials.end(),
           [](stm::MaterialIndex m) { return m != stm::BackgroundMaterial; }))
     {
-      // No body voxel within two root cells of the piece: the body, and the background cells
+      // No body voxel in the piece's ghost box: the body, and the background cells
       // next to it, lie in other pieces (a small body on many ranks).
       output->Initialize();
       return 1;

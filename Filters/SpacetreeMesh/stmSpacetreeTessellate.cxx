@@ -292,12 +292,17 @@ bool Tessellate(vtkUnstructuredGrid* input, const stmSpacetreeGeometry& geometry
   }
   if (geometry.IsPiece)
   {
-    // The leaves beyond the first ghost root layer give no cells: they are there to make the
-    // first layer's leaves the whole tree's (stm::GhostRootLayers), and their cells would only
+    // The leaves of the outer ghost root layer give no cells: they are there to make the
+    // inner layers' leaves the whole tree's (stm::GhostRootLayersFor), and their cells would only
     // cost memory and time in every later stage.
+    stm::LatticeIndex<Dim> rootVoxels;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      rootVoxels[axis] = tree.CellSizes[0][axis] / tree.VoxelSubdivision[axis];
+    }
     options.HiddenLeaves.assign(static_cast<std::size_t>(tree.GetNumberOfLeaves()), 0);
     stmSpacetreeData::MarkLeavesOutsideOwnedBox<Dim>(
-      tree, geometry, stm::GhostRootLayers - 1, 1, options.HiddenLeaves.data());
+      tree, geometry, stm::GhostRootLayersFor<Dim>(rootVoxels) - 1, 1, options.HiddenLeaves.data());
   }
   const std::array<double, Dim> voxelEdges = VoxelEdges<Dim>(tree, geometry);
   if (!options.IncludeBackground)

@@ -35,8 +35,31 @@
 namespace stm
 {
 
-/// Layers of ghost root cells around a piece's box (see the top of this file).
+/// Layers of ghost root cells around a piece's box (see the top of this file), at least.
 constexpr int GhostRootLayers = 2;
+
+/// The voxels of ghost cells a piece's mesh keeps beyond its box, at least: the cuts' snapping
+/// decides a point from its neighbours' decisions, in rounds, and the whole mesh's decisions
+/// reach a piece's own points only through the cells the piece has. With one kept layer of root
+/// cells of 4 or 6 voxels, stmMultiMaterialCut's pieces of the nested ellipsoids (3 and 4 pieces)
+/// snapped other points than the whole mesh; with 8 voxels and more they did not. The default
+/// root cells (16 voxels) keep one layer, as before.
+constexpr std::int64_t MinimumKeptGhostVoxels = 16;
+
+/// Layers of ghost root cells for root cells of `rootVoxels` voxels per axis: the outer layer,
+/// which completes the inner ones' leaves and gives no cells, and as many inner layers as
+/// MinimumKeptGhostVoxels needs (one at least).
+template <int Dim>
+int GhostRootLayersFor(const LatticeIndex<Dim>& rootVoxels)
+{
+  std::int64_t smallest = MinimumKeptGhostVoxels;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    smallest = std::min(smallest, std::max<std::int64_t>(1, rootVoxels[axis]));
+  }
+  const std::int64_t inner = (MinimumKeptGhostVoxels + smallest - 1) / smallest;
+  return static_cast<int>(1 + std::max<std::int64_t>(GhostRootLayers - 1, inner));
+}
 
 /// A box [Lower, Upper) of root cells.
 template <int Dim>

@@ -57,6 +57,24 @@ TYPED_TEST(RootPiecesTest, PiecesPartitionTheRootGrid)
   EXPECT_TRUE(stm::PieceRootBox<D>(UniformExtents<D>(4), 2, -1).IsEmpty());
 }
 
+// One inner ghost layer for the default root cells (16 voxels) and larger ones; for smaller root
+// cells as many as keep MinimumKeptGhostVoxels, by the smallest edge; always an outer one more.
+TYPED_TEST(RootPiecesTest, GhostLayersKeepSixteenVoxels)
+{
+  constexpr int D = TypeParam::value;
+  EXPECT_EQ(stm::MinimumKeptGhostVoxels, 16);
+  EXPECT_EQ(stm::GhostRootLayersFor<D>(UniformExtents<D>(16)), 2);
+  EXPECT_EQ(stm::GhostRootLayersFor<D>(UniformExtents<D>(64)), 2);
+  EXPECT_EQ(stm::GhostRootLayersFor<D>(UniformExtents<D>(15)), 3);
+  EXPECT_EQ(stm::GhostRootLayersFor<D>(UniformExtents<D>(8)), 3);
+  EXPECT_EQ(stm::GhostRootLayersFor<D>(UniformExtents<D>(5)), 5);
+  EXPECT_EQ(stm::GhostRootLayersFor<D>(UniformExtents<D>(4)), 5);
+  EXPECT_EQ(stm::GhostRootLayersFor<D>(UniformExtents<D>(1)), 17);
+  stm::LatticeIndex<D> anisotropic = UniformExtents<D>(32);
+  anisotropic[D - 1] = 4;
+  EXPECT_EQ(stm::GhostRootLayersFor<D>(anisotropic), 5);
+}
+
 TYPED_TEST(RootPiecesTest, BisectionHalvesTheLongestAxis)
 {
   constexpr int D = TypeParam::value;
