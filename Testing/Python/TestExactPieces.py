@@ -9,7 +9,8 @@ With every part on, the owned cells of the P pieces are the serial mesh's cells 
 nested ellipsoids with a one-voxel layer to MultiMaterialCut (volume targets from its
 OriginalMaterialVolumes, and from the cells' OriginalMaterial with bounds tight enough that the
 improvement moves points; with noise at the centre, where the serial run splits edges, to
-MultiMaterialCut), and a 2D image to MarchingSimplices.
+MultiMaterialCut), and a 2D image to MarchingSimplices. And an abort on rank 1 halfway through
+the exchanged smoothing stops every rank.
 """
 import os
 
@@ -129,3 +130,29 @@ yy, xx = np.mgrid[0:70, 0:64]
 two_d = ((xx - 30.5) ** 2 / 26.0 ** 2 + (yy - 36.0) ** 2 / 30.0 ** 2 < 1.0).astype(np.uint8)
 two_d[(xx - 30.5) ** 2 + (yy - 30.0) ** 2 < 12.0 ** 2] = 2
 check(two_d[np.newaxis], 3, "surface", "2D to MarchingSimplices, smoothed")
+
+# An abort on one rank during the exchanged steps: every rank stops at the same check (the
+# smoothing agrees on each abort check while it exchanges), none waits for the others, and
+# every rank's output is empty. Before, rank 1 left the exchanges and the others waited.
+stages = chain(T.make_image(three_d), "materials")
+smooth = stages[-1]
+stopped = []
+
+
+def abort_halfway(caller, event):
+    if rank == 1 and caller.GetProgress() >= 0.5 and not stopped:
+        stopped.append(caller.GetProgress())
+        caller.SetAbortExecute(1)
+
+
+smooth.AddObserver("ProgressEvent", abort_halfway)
+errors = [T.ErrorCollector(stage) for stage in stages[1:]]
+T.check(smooth.UpdatePiece(rank, ranks, 0) == 1, "abort: rank %d failed" % rank)
+T.check(not any(e.errors for e in errors), "abort: rank %d: %r" % (
+    rank, [e.errors for e in errors]))
+T.check(rank != 1 or stopped, "abort: rank 1 never reached half of the smoothing")
+T.check(smooth.GetOutput().GetNumberOfCells() == 0,
+        "abort: rank %d kept %d cells" % (rank, smooth.GetOutput().GetNumberOfCells()))
+controller.Barrier()
+if rank == 0:
+    print("abort on rank 1 during the exchanged smoothing: every rank stopped")

@@ -602,6 +602,16 @@ private:
   double ConditionBound = 0.0;
   // Whether Step exchanges with the other pieces (Options.Exchange, during the iterations).
   bool Exchanging = false;
+
+  /// executor.ShouldAbort(), agreed by all pieces when they exchange (collective then): a piece
+  /// that stopped alone would leave the others waiting at their next exchange. Every call site
+  /// is one that all pieces reach in the same order.
+  template <class Executor>
+  bool StopAgreed(Executor& executor) const
+  {
+    const bool stop = executor.ShouldAbort();
+    return this->Options.Exchange ? this->Options.Exchange->Maximum(stop ? 1.0 : 0.0) > 0.0 : stop;
+  }
   double CosineBound = 1.0;
   double OptionCosine = 1.0; // the cosine of MinDihedralAngle
   std::atomic<std::int64_t> Accepted{ 0 };
@@ -1299,7 +1309,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   { return !materials || materials[a] == materials[b]; };
 
   this->Incidence.Build(connectivity, cells, numberOfPoints, executor);
-  if (executor.ShouldAbort())
+  if (this->StopAgreed(executor))
   {
     return Status::Aborted();
   }
@@ -1367,7 +1377,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   };
   MeasureKernel measure{ this, connectivity, true };
   executor.For(0, cells, 4096, measure);
-  if (executor.ShouldAbort())
+  if (this->StopAgreed(executor))
   {
     return Status::Aborted();
   }
@@ -1472,7 +1482,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   };
   FacetKernel facets{ this, connectivity, facetBits.get(), &isBackground, &sameMaterial };
   executor.For(0, numberOfPoints, 4096, facets);
-  if (executor.ShouldAbort())
+  if (this->StopAgreed(executor))
   {
     return Status::Aborted();
   }
@@ -1573,7 +1583,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   }
   std::vector<std::uint8_t>().swap(fixedMasks);
   std::vector<std::uint8_t>().swap(outerMasks);
-  if (executor.ShouldAbort())
+  if (this->StopAgreed(executor))
   {
     return Status::Aborted();
   }
@@ -1693,7 +1703,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
       frontier.swap(next);
     }
   }
-  if (executor.ShouldAbort())
+  if (this->StopAgreed(executor))
   {
     return Status::Aborted();
   }
@@ -1765,7 +1775,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   EdgeKernel edges{ this, connectivity, chunkNeighbours.data(), tips.data() };
   executor.For(0, edgeChunks, 1, edges);
   JoinRows(chunkNeighbours, this->EdgeOffsets, this->EdgeNeighbours);
-  if (executor.ShouldAbort())
+  if (this->StopAgreed(executor))
   {
     return Status::Aborted();
   }
@@ -1801,7 +1811,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
       static_cast<int>(std::max(surfaceBlocks.ByColour.size(), interiorBlocks.ByColour.size()));
     this->Stats.RootCellBlocks = options.CellRootColours != nullptr;
   }
-  if (executor.ShouldAbort())
+  if (this->StopAgreed(executor))
   {
     return Status::Aborted();
   }
@@ -1831,7 +1841,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   };
   CopyKernel copies{ this };
   executor.For(0, numberOfPoints, 1 << 14, copies);
-  if (executor.ShouldAbort())
+  if (this->StopAgreed(executor))
   {
     return Status::Aborted(); // the copies may be incomplete
   }
@@ -1884,7 +1894,7 @@ Status BoundarySmoother<Dim>::Smooth(double* points, std::int64_t numberOfPoints
   this->Determinants.resize(static_cast<std::size_t>(cells));
   measure.First = false;
   executor.For(0, cells, 4096, measure);
-  if (executor.ShouldAbort())
+  if (this->StopAgreed(executor))
   {
     return Status::Aborted();
   }
@@ -2463,7 +2473,7 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
   }
   for (const auto& colour : blocks.ByColour)
   {
-    if (executor.ShouldAbort())
+    if (this->StopAgreed(executor))
     {
       return Status::Aborted();
     }
@@ -2510,7 +2520,7 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
       }
     }
   }
-  return executor.ShouldAbort() ? Status::Aborted() : Status::Ok();
+  return this->StopAgreed(executor) ? Status::Aborted() : Status::Ok();
 }
 
 template <int Dim>
@@ -2942,7 +2952,7 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
         };
         ScanKernel scan{ this, &isBad, rangeCells, rangeBad.data() };
         executor.For(0, Ranges, 1, scan);
-        if (executor.ShouldAbort())
+        if (this->StopAgreed(executor))
         {
           return Status::Aborted();
         }
@@ -3012,7 +3022,7 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
         {
           BlockKernel<ImproveKernel> byBlock{ &kernel, &blocks, &colour };
           executor.For(0, static_cast<std::int64_t>(colour.size()), 1, byBlock);
-          if (executor.ShouldAbort())
+          if (this->StopAgreed(executor))
           {
             return Status::Aborted();
           }
@@ -3050,7 +3060,7 @@ Status BoundarySmoother<Dim>::Improve(const IdType* connectivity, const Material
           ImproveKernel kernel{ this, &points, connectivity, materials, &projector, project,
             &badness, &executor, &improved, phase == 1 };
           executor.For(0, static_cast<std::int64_t>(points.size()), 16, kernel);
-          if (executor.ShouldAbort())
+          if (this->StopAgreed(executor))
           {
             return Status::Aborted();
           }
@@ -3232,7 +3242,7 @@ Status BoundarySmoother<Dim>::RestoreVolumes(const PointBlocks& surfaceBlocks,
     GradientKernel gradientKernel{ this, connectivity, materials, &points, first.data(),
       gradients.data(), factorial };
     executor.For(0, count, 1024, gradientKernel);
-    if (executor.ShouldAbort())
+    if (this->StopAgreed(executor))
     {
       return Status::Aborted();
     }
