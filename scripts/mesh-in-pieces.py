@@ -4,6 +4,10 @@ writes the pieces as one .pvtu (inline binary, ghost cells marked vtkGhostType).
 
     mpiexec -n 2 pvbatch --symmetric scripts/mesh-in-pieces.py aal.nii.gz [out.pvtu]
 
+A .vti image is read with VTK's XML reader, a NIfTI image with the plugin's reader; both give
+sub-extents, so each rank reads only its ghost box grown by one voxel (the ranks classify the
+thin parts together) and prints how many voxels it read.
+
 Run by pvbatch or pvpython with the plugin built in ./build (or STM_PLUGIN naming it). Under
 pvpython there is one rank: the whole image in one piece, for comparison.
 """
@@ -36,7 +40,12 @@ ranks = controller.GetNumberOfProcesses() if controller else 1
 rank = controller.GetLocalProcessId() if controller else 0
 
 start = time.time()
-reader = spacetreemesh.stmNIFTIImageReader()
+if sys.argv[1].endswith(".vti"):
+    from vtkmodules.vtkIOXML import vtkXMLImageDataReader  # noqa: E402
+
+    reader = vtkXMLImageDataReader()
+else:
+    reader = spacetreemesh.stmNIFTIImageReader()
 reader.SetFileName(sys.argv[1])
 stages = [spacetreemesh.stmImageToSpacetree()]
 stages[0].SetInputConnection(reader.GetOutputPort())
@@ -46,7 +55,11 @@ for make in (spacetreemesh.stmSpacetreeBalance, spacetreemesh.stmSpacetreeTessel
              spacetreemesh.stmBoundarySmooth):
     stages.append(make())
     stages[-1].SetInputConnection(stages[-2].GetOutputPort())
-# Each stage's output is freed once the next has run, as stmesh does between its stages.
+# Each stage's output is freed once the next has run, as stmesh does between its stages (the
+# reader's after the voxels read are counted).
+read = []
+stages[0].AddObserver("StartEvent", lambda caller, event: read.append(
+    reader.GetOutputDataObject(0).GetNumberOfPoints()))
 reader.ReleaseDataFlagOn()
 for stage in stages[:-1]:
     stage.ReleaseDataFlagOn()
@@ -55,8 +68,8 @@ if not stages[-1].UpdatePiece(rank, ranks, 0):
 mesh = stages[-1].GetOutput()
 ghosts = mesh.GetCellData().GetArray(vtkDataSetAttributes.GhostArrayName())
 owned = mesh.GetNumberOfCells() - (int((vtk_to_numpy(ghosts) != 0).sum()) if ghosts else 0)
-print("rank %d of %d: %.2f s, %d cells, %d of them its own, peak RSS %.0f MiB" % (
-    rank, ranks, time.time() - start, mesh.GetNumberOfCells(), owned,
+print("rank %d of %d: %.2f s, %d voxels read, %d cells, %d of them its own, peak RSS %.0f MiB" % (
+    rank, ranks, time.time() - start, read[0] if read else -1, mesh.GetNumberOfCells(), owned,
     resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0), flush=True)
 
 if len(sys.argv) == 3:

@@ -407,8 +407,8 @@ Arguments:
   --mpi                 start MPI even without a launcher that announces itself (Open MPI's,
                         MPICH's or a PMIx mpiexec are recognised; a .pvtu output starts MPI
                         too). With P > 1 ranks every rank reads the image, meshes its share of
-                        the root cells with two root cells of ghosts beyond it and drops the
-                        ghosts; the pieces are the one-rank mesh cell for cell, the
+                        the root cells with ghost root cells beyond it (two, more for root
+                        cells under 16 voxels) and drops the ghosts; the pieces are the one-rank mesh cell for cell, the
                         smoothing included: the ranks exchange the points they share in
                         every part of it, the edge splits too. Each rank uses
                         the machine's cores divided by the ranks on it, at most the cores
@@ -5152,8 +5152,8 @@ int Run(const Options& options, const ParallelRun& parallel)
   if (parallel.Ranks() > 1)
   {
     std::cout << "ranks:   " << parallel.Ranks()
-              << " MPI ranks, each meshing its root cells with two root cells of ghosts; the "
-                 "table shows rank 0's piece\n";
+              << " MPI ranks, each meshing its root cells with ghost root cells around them; "
+                 "the table shows rank 0's piece\n";
   }
   std::cout.flush();
 
