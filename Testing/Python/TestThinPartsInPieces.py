@@ -39,11 +39,11 @@ if rank == 0:
 controller.Barrier()
 
 
-def chain(mode, root):
+def chain(mode, root, split=True):
     reader = vtkXMLImageDataReader()
     reader.SetFileName(path)
     tree, balance, tessellate = T.spacetree_chain(reader)
-    tree.SetSplitIntoPieces(True)
+    tree.SetSplitIntoPieces(split)
     tree.SetThinPartRefinement(mode)
     tree.SetRootCellSize(root, root, root)
     stages = [reader, tree, balance, tessellate]
@@ -54,12 +54,13 @@ def chain(mode, root):
     return stages
 
 
-# Root cells of 4 voxels: the pieces keep 4 layers of ghost root cells (stm::GhostRootLayersFor);
+# Root cells of 4 voxels: the pieces keep 4 inner layers of ghost root cells and the outer one
+# (stm::GhostRootLayersFor);
 # with one, MultiMaterialCut's snapping decided other points than the whole mesh's.
 cases = [(spacetreemesh.stmImageToSpacetree.THIN_BODY_PARTS, "body", 0),
          (spacetreemesh.stmImageToSpacetree.THIN_MATERIAL_PARTS, "materials", 0),
          (spacetreemesh.stmImageToSpacetree.THIN_MATERIAL_PARTS, "materials, root cells of 4", 4)]
-for mode, what, root in cases:
+for case, (mode, what, root) in enumerate(cases):
     stages = chain(mode, root)
     errors = [T.ErrorCollector(stage) for stage in stages[1:]]
     T.check(stages[-1].UpdatePiece(rank, ranks, 0) == 1, "%s: rank %d failed" % (what, rank))
@@ -72,27 +73,17 @@ for mode, what, root in cases:
         what, rank, extent, whole))
     own = T.owned_cell_rows(stages[-1].GetOutput(), 4)
     T.check(len(own) > 0, "%s: rank %d owns no cell" % (what, rank))
-    np.save(os.path.join(temp, "thin_%d_%d_%d.npy" % (len(what), ranks, rank)), own)
-    np.save(os.path.join(temp, "read_%d_%d_%d.npy" % (len(what), ranks, rank)), [read])
+    np.save(os.path.join(temp, "thin_%d_%d_%d.npy" % (case, ranks, rank)), own)
+    np.save(os.path.join(temp, "read_%d_%d_%d.npy" % (case, ranks, rank)), [read])
     controller.Barrier()
     if rank == 0:
         # The serial run: one piece, the whole image, classified alone.
-        reader = vtkXMLImageDataReader()
-        reader.SetFileName(path)
-        tree, balance, tessellate = T.spacetree_chain(reader)
-        tree.SetThinPartRefinement(mode)
-        tree.SetRootCellSize(root, root, root)
-        serial = [reader, tree, balance, tessellate]
-        if mode == spacetreemesh.stmImageToSpacetree.THIN_MATERIAL_PARTS:
-            T.append_stages(serial, spacetreemesh.stmMultiMaterialCut)
-        else:
-            T.append_stages(serial, spacetreemesh.stmVertexSnap,
-                            spacetreemesh.stmMarchingSimplices)
+        serial = chain(mode, root, split=False)
         serial[-1].Update()
-        thin_voxels = tree.GetNumberOfThinVoxels()
+        thin_voxels = serial[1].GetNumberOfThinVoxels()
         T.check(thin_voxels > 0, "%s: the serial run found no thin voxel" % what)
         expected = T.owned_cell_rows(serial[-1].GetOutput(), 4)
-        together = np.concatenate([np.load(os.path.join(temp, "thin_%d_%d_%d.npy" % (len(what), ranks, r)))
+        together = np.concatenate([np.load(os.path.join(temp, "thin_%d_%d_%d.npy" % (case, ranks, r)))
                                    for r in range(ranks)])
         together = together[np.lexsort(together.T[::-1])]
         T.check(together.shape == expected.shape, "%s, %d ranks: %d owned cells, serial %d" % (
@@ -100,7 +91,7 @@ for mode, what, root in cases:
         differing = np.count_nonzero(np.any(together != expected, axis=1))
         T.check(differing == 0, "%s, %d ranks: %d of %d cells differ from the serial mesh's"
                 % (what, ranks, differing, len(expected)))
-        reads = [int(np.load(os.path.join(temp, "read_%d_%d_%d.npy" % (len(what), ranks, r)))[0])
+        reads = [int(np.load(os.path.join(temp, "read_%d_%d_%d.npy" % (case, ranks, r)))[0])
                  for r in range(ranks)]
         print("%s, %d ranks: %d thin voxels, %d cells, the serial mesh's bit for bit; the ranks "
               "read %r of %d voxels" % (what, ranks, thin_voxels, len(expected), reads,
