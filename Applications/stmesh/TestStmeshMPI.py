@@ -16,6 +16,7 @@ cells.
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -208,13 +209,42 @@ def cell_set(coordinates, cells):
                   for corners, material in cells)
 
 
+def voxels_read(out, ranks):
+    """The voxels each rank read, from rank 0's table of the ranks."""
+    counts = {}
+    for line in out.splitlines():
+        match = re.match(r"  rank (\d+) .* (\d+) voxels read$", line)
+        if match:
+            counts[int(match.group(1))] = int(match.group(2))
+    check(sorted(counts) == list(range(ranks)), "the table lists ranks %s" % sorted(counts))
+    return [counts[rank] for rank in range(ranks)]
+
+
+def image_voxels(image):
+    """The voxels of a label image made here: DIMENSIONS, or the cells of the whole extent of a
+    .vti of cell labels."""
+    if image is None or not image.endswith(".vti"):
+        return DIMENSIONS[0] * DIMENSIONS[1] * DIMENSIONS[2]
+    from vtkmodules.vtkIOXML import vtkXMLImageDataReader
+    reader = vtkXMLImageDataReader()
+    reader.SetFileName(image)
+    reader.UpdateInformation()
+    extent = reader.GetOutputInformation(0).Get(
+        reader.GetExecutive().WHOLE_EXTENT())
+    return (extent[1] - extent[0]) * (extent[3] - extent[2]) * (extent[5] - extent[4])
+
+
 def mesh_with_ranks(c, ranks, name, extra, image=None):
     output = c.path(name + ".pvtu")
     _, out, _ = c.run_ranks(ranks, [image or c.labels(), "-o", output] + extra)
     if ranks > 1:
         check("ranks:   %d MPI ranks" % ranks in out, "no rank table")
-        for rank in range(ranks):
-            check("  rank %-4d" % rank in out, "rank %d is missing from the table" % rank)
+        voxels = voxels_read(out, ranks)
+        # Each rank reads its extent (its ghost box, grown by a voxel for the thin parts), here
+        # (nine root cells across) often the whole image.
+        check(all(0 < count <= image_voxels(image) for count in voxels),
+              "%d ranks read %s voxels of %d" % (ranks, voxels, image_voxels(image)))
+    c.voxels_read = voxels if ranks > 1 else None
     grids = read_pieces(output)
     check(len(grids) == ranks, "%d pieces for %d ranks" % (len(grids), ranks))
     coordinates, cells, volumes = global_mesh(grids)
@@ -261,6 +291,51 @@ def case_thin_parts(c):
         else:
             check(cells_by_coordinates == reference,
                   "%d ranks: not the cells of one rank" % ranks)
+
+
+def case_merge_cell_labels(c):
+    # --merge under MPI merges each rank's extent; the labels as cell data of a .vti (inline
+    # binary), whose extents hold one point more than their voxels. The image is 8 root cells
+    # long, so that each of 2 ranks reads 6 of them (its 4 and 2 of ghosts) and a voxel more.
+    # Two ranks give the one-rank cells, and a --merge source found on no rank fails every rank.
+    from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
+    vtk = T.vtk_modules()
+    voxels = (128, 48, 40)
+    image = vtk["vtkImageData"]()
+    image.SetDimensions(*(n + 1 for n in voxels))
+    labels = vtkUnsignedCharArray()
+    labels.SetName("labels")
+    for k in range(voxels[2]):
+        for j in range(voxels[1]):
+            for i in range(voxels[0]):
+                labels.InsertNextValue(nested_labels(i - 36, j, k))
+    image.GetCellData().SetScalars(labels)
+    errors = []
+    writer = T.watched(vtk["vtkXMLImageDataWriter"](), errors)
+    writer.SetDataModeToBinary()
+    writer.SetInputData(image)
+    path = c.path("cells.vti")
+    writer.SetFileName(path)
+    writer.Write()
+    check(not errors, "cannot write cells.vti: %s" % errors)
+    extra = ["--smooth-iterations", "0", "--labels", "all", "--merge", "2,3:7"]
+    reference = None
+    for ranks in (1, 2):
+        coordinates, cells, _ = mesh_with_ranks(c, ranks, "m%d" % ranks, extra, path)
+        cells_by_coordinates = cell_set(coordinates, cells)
+        if reference is None:
+            reference = cells_by_coordinates
+            materials = sorted(set(material for _, material in reference))
+            check(materials == [0, 1, 7], "materials %s, expected 0, 1 and 7" % materials)
+        else:
+            check(cells_by_coordinates == reference, "2 ranks: not the one-rank cells")
+            whole = voxels[0] * voxels[1] * voxels[2]
+            check(all(count == 97 * 48 * 40 for count in c.voxels_read),
+                  "2 ranks read %s of %d voxels, expected 97 x 48 x 40 each" % (
+                      c.voxels_read, whole))
+    _, _, err = c.run_ranks(2, [path, "--merge", "2,9:7", "-o", c.path("x.pvtu")],
+                            expected_code=1)
+    check("--merge: source label 9 does not occur" in err, "no error for the absent source")
 
 
 def case_ranks_default(c):

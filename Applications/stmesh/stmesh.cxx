@@ -76,6 +76,7 @@
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkPolyDataWriter.h"
+#include "vtkProgrammableFilter.h"
 #include "vtkSMPThreadLocal.h"
 #include "vtkSMPTools.h"
 #include "vtkSmartPointer.h"
@@ -406,17 +407,17 @@ Arguments:
                         printed line's counts leave it out.
   --mpi                 start MPI even without a launcher that announces itself (Open MPI's,
                         MPICH's or a PMIx mpiexec are recognised; a .pvtu output starts MPI
-                        too). With P > 1 ranks every rank reads the image, meshes its share of
-                        the root cells with ghost root cells beyond it (two, more for root
-                        cells under 16 voxels) and drops the ghosts; the pieces are the one-rank mesh cell for cell, the
-                        smoothing included: the ranks exchange the points they share in
-                        every part of it, the edge splits too. Each rank uses
-                        the machine's cores divided by the ranks on it, at most the cores
-                        the launcher bound it to, unless --threads or VTK_SMP_MAX_THREADS
-                        says otherwise. Not with --grading or
-                        --output-mode surface; --report and --interfaces need a single-file
-                        output. Rank 0 prints the table of its own piece and each rank's time,
-                        cells and peak memory.
+                        too). With P > 1 ranks every rank reads only its extent of the image
+                        (a .nii.gz is inflated up to it), meshes its share of the root cells
+                        with ghost root cells beyond it (two, more for root cells under 16
+                        voxels) and drops the ghosts; the pieces are the one-rank mesh cell for
+                        cell, the smoothing included: the ranks exchange the points they share
+                        in every part of it, the edge splits too. Each rank uses the machine's
+                        cores divided by the ranks on it, at most the cores the launcher bound
+                        it to, unless --threads or VTK_SMP_MAX_THREADS says otherwise. Not with
+                        --grading or --output-mode surface; --report and --interfaces need a
+                        single-file output. Rank 0 prints the table of its own piece and each
+                        rank's time, cells, peak memory and voxels read.
   -h, --help            show this help and exit.
   --version             show the version and exit.
 
@@ -2007,24 +2008,41 @@ int ThreadsPerRank(int requestedThreads, int ranks, std::string& note)
 //------------------------------------------------------------------------------------------------
 // Reading (stmeshImageInput.h), and the checks of the label image's type.
 
+/// The read stage's description of the image, and the check that labels are integers.
+void DescribeReadImage(vtkImageData* image, const std::string& path, const ImageInfo& info,
+  StageReport& report, bool labelImage = true)
+{
+  if (labelImage && !stmImageToSpacetree::IsLabelType(ImageValues(image, info)->GetDataType()))
+  {
+    throw Failure("reading '" + path + "': the image holds " + info.ScalarType +
+      " values; stmesh needs an integer label image (a segmentation, not a gray-value image)");
+  }
+  std::ostringstream description;
+  description << info.Dimensions[0] << " x " << info.Dimensions[1] << " x " << info.Dimensions[2]
+              << " voxels, " << info.ScalarType;
+  report.Description = description.str();
+}
+
 /// Read the label image (labelImage) or the gray image of --separating gray.
 vtkSmartPointer<vtkImageData> ReadImage(
   const std::string& path, ImageInfo& info, StageReport& report, bool labelImage = true)
 {
   vtkSmartPointer<vtkImageData> image =
     stmesh::ReadImage(path, labelImage ? ImageRole::Labels : ImageRole::Gray, info, report.Seconds);
-  if (labelImage && !stmImageToSpacetree::IsLabelType(ImageValues(image, info)->GetDataType()))
-  {
-    throw Failure("reading '" + path + "': the image holds " + info.ScalarType +
-      " values; stmesh needs an integer label image (a segmentation, not a gray-value image)");
-  }
+  DescribeReadImage(image, path, info, report, labelImage);
   report.Points = static_cast<long long>(image->GetNumberOfPoints());
   RecordResources(report);
-  std::ostringstream description;
-  description << info.Dimensions[0] << " x " << info.Dimensions[1] << " x " << info.Dimensions[2]
-              << " voxels, " << info.ScalarType;
-  report.Description = description.str();
   return image;
+}
+
+/// Opens the label image for a run in pieces, in which each rank reads its own extent when the
+/// spacetree filter asks for it.
+stmesh::ImageSource OpenLabelImage(const std::string& path, ImageInfo& info, StageReport& report)
+{
+  stmesh::ImageSource source = stmesh::OpenImage(path, ImageRole::Labels, info, report.Seconds);
+  DescribeReadImage(source.Sample, path, info, report);
+  RecordResources(report);
+  return source;
 }
 
 //------------------------------------------------------------------------------------------------
@@ -2087,13 +2105,9 @@ struct RemapLabels
   }
 };
 
-/// --merge: a copy of the image whose label array has the merged labels. A target that the
-/// label type cannot hold widens the copy to int (long long for unsigned 32- and 64-bit labels).
-/// A source that does not occur in the image fails, as an absent --labels label does.
-vtkSmartPointer<vtkImageData> MergeLabels(
-  vtkImageData* image, const ImageInfo& info, const Options& options, const std::string& input)
+/// The --merge table: (source, target) pairs sorted by source.
+std::vector<std::pair<long long, long long>> MergeTable(const Options& options)
 {
-  vtkDataArray* labels = ImageValues(image, info);
   std::vector<std::pair<long long, long long>> table;
   for (const MergeGroup& group : options.Merges)
   {
@@ -2103,6 +2117,17 @@ vtkSmartPointer<vtkImageData> MergeLabels(
     }
   }
   std::sort(table.begin(), table.end());
+  return table;
+}
+
+/// --merge: a copy of the image whose label array has the merged labels. A target that the
+/// label type cannot hold widens the copy to int (long long for unsigned 32- and 64-bit labels).
+/// seen[i] is set where the table's i-th source occurs in the image (MergeTable's order).
+vtkSmartPointer<vtkImageData> MergeLabels(
+  vtkImageData* image, const ImageInfo& info, const Options& options, std::vector<char>& seen)
+{
+  vtkDataArray* labels = ImageValues(image, info);
+  const std::vector<std::pair<long long, long long>> table = MergeTable(options);
   vtkSmartPointer<vtkDataArray> source = labels;
   bool fits = true;
   for (const MergeGroup& group : options.Merges)
@@ -2130,10 +2155,30 @@ vtkSmartPointer<vtkImageData> MergeLabels(
   {
     remap(source.GetPointer()); // generic fallback through the vtkDataArray API
   }
+  seen.resize(table.size(), 0);
+  for (std::size_t i = 0; i < table.size(); ++i)
+  {
+    seen[i] = static_cast<char>(seen[i] | remap.Seen[i]);
+  }
+  vtkSmartPointer<vtkImageData> copy = vtkSmartPointer<vtkImageData>::New();
+  copy->ShallowCopy(image);
+  vtkDataSetAttributes* data = info.CellLabels
+    ? static_cast<vtkDataSetAttributes*>(copy->GetCellData())
+    : static_cast<vtkDataSetAttributes*>(copy->GetPointData());
+  data->SetScalars(merged);
+  return copy;
+}
+
+/// A source of --merge that does not occur in the image fails, as an absent --labels label
+/// does; seen: MergeLabels's flags over the whole image.
+void CheckMergeSourcesSeen(
+  const Options& options, const std::vector<char>& seen, const std::string& input)
+{
+  const std::vector<std::pair<long long, long long>> table = MergeTable(options);
   std::string absent;
   for (std::size_t i = 0; i < table.size(); ++i)
   {
-    if (!remap.Seen[i])
+    if (i >= seen.size() || !seen[i])
     {
       absent += (absent.empty() ? "" : ", ") + std::to_string(table[i].first);
     }
@@ -2144,13 +2189,73 @@ vtkSmartPointer<vtkImageData> MergeLabels(
     throw Failure(std::string("--merge: source label") + (one ? " " : "s ") + absent +
       (one ? " does" : " do") + " not occur in the image '" + input + "'");
   }
-  vtkSmartPointer<vtkImageData> copy = vtkSmartPointer<vtkImageData>::New();
-  copy->ShallowCopy(image);
-  vtkDataSetAttributes* data = info.CellLabels
-    ? static_cast<vtkDataSetAttributes*>(copy->GetCellData())
-    : static_cast<vtkDataSetAttributes*>(copy->GetPointData());
-  data->SetScalars(merged);
-  return copy;
+}
+
+/// --merge in a run in pieces: the merge as a pipeline step between the reader and the
+/// spacetree filter, which passes the filter's extent request on to the reader (as every
+/// vtkProgrammableFilter does), so that each rank merges the labels of its own extent only.
+struct PieceMerge
+{
+  vtkNew<vtkProgrammableFilter> Filter;
+  const ImageInfo* Info = nullptr;
+  const Options* MergeOptions = nullptr;
+  std::vector<char> Seen; // of this rank's extent
+
+  PieceMerge(vtkAlgorithmOutput* input, const ImageInfo& info, const Options& options)
+    : Info(&info)
+    , MergeOptions(&options)
+    , Seen(MergeTable(options).size(), 0)
+  {
+    this->Filter->SetInputConnection(input);
+    this->Filter->SetExecuteMethod(&PieceMerge::Execute, this);
+    Watch(this->Filter);
+  }
+
+  static void Execute(void* self)
+  {
+    auto* merge = static_cast<PieceMerge*>(self);
+    vtkImageData* piece = vtkImageData::SafeDownCast(merge->Filter->GetInput());
+    vtkImageData* output = merge->Filter->GetImageDataOutput();
+    if (!piece || !output)
+    {
+      return;
+    }
+    if (!ImageValues(piece, *merge->Info)) // an empty piece: a rank without root cells
+    {
+      output->ShallowCopy(piece);
+      return;
+    }
+    output->ShallowCopy(MergeLabels(piece, *merge->Info, *merge->MergeOptions, merge->Seen));
+  }
+};
+
+/// The label image, its labels merged by --merge.
+vtkSmartPointer<vtkImageData> ReadMergedImage(
+  const std::string& input, const Options& options, ImageInfo& info, StageReport& report)
+{
+  vtkSmartPointer<vtkImageData> image = ReadImage(input, info, report);
+  if (!options.Merges.empty())
+  {
+    const Clock::time_point mergeStart = Clock::now();
+    std::vector<char> seen;
+    image = MergeLabels(image, info, options, seen);
+    CheckMergeSourcesSeen(options, seen, input);
+    report.Seconds += SecondsSince(mergeStart);
+  }
+  return image;
+}
+
+/// Whether each --merge source occurs on any rank (PieceMerge's flags of every rank).
+std::vector<char> SeenOnAnyRank(const std::vector<char>& mine, const ParallelRun& parallel)
+{
+  const std::vector<long long> all =
+    parallel.AllGather(std::vector<long long>(mine.begin(), mine.end()));
+  std::vector<char> seen(mine.size(), 0);
+  for (std::size_t i = 0; i < all.size(); ++i)
+  {
+    seen[i % seen.size()] = static_cast<char>(seen[i % seen.size()] | (all[i] != 0));
+  }
+  return seen;
 }
 
 //------------------------------------------------------------------------------------------------
@@ -2170,14 +2275,17 @@ MeshingPiece CurrentPiece;
 
 /// Runs one filter on input port 0 and returns a copy of its output (a vtkUnstructuredGrid, or
 /// the cut's surface as a vtkPolyData); adds its wall time to the report. The filter is asked
-/// for piece CurrentPiece.
+/// for piece CurrentPiece. A null input: the filter is connected to its input's algorithm.
 vtkSmartPointer<vtkPointSet> RunFilter(
   vtkAlgorithm* filter, vtkDataObject* input, const std::string& context, StageReport& report)
 {
   const int piece = CurrentPiece.Piece;
   const int pieces = CurrentPiece.Pieces;
   Watch(filter);
-  filter->SetInputDataObject(0, input);
+  if (input)
+  {
+    filter->SetInputDataObject(0, input);
+  }
   const Clock::time_point start = Clock::now();
   filter->UpdatePiece(piece, pieces, 0);
   report.Seconds += SecondsSince(start);
@@ -3401,6 +3509,7 @@ struct RankFigures
   long long Cells = 0; // its own cells, without ghosts
   long long Points = 0;
   double PeakRssMiB = 0.0;
+  long long VoxelsRead = 0; // of the label image
 };
 
 struct RunSummary
@@ -3651,7 +3760,7 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
       json << (rank ? ",\n    " : "\n    ") << "{\"seconds\": " << std::setprecision(6)
            << figures.Seconds << ", \"cells\": " << figures.Cells
            << ", \"points\": " << figures.Points << ", \"peak_rss_mib\": " << std::setprecision(3)
-           << figures.PeakRssMiB << "}";
+           << figures.PeakRssMiB << ", \"voxels_read\": " << figures.VoxelsRead << "}";
     }
     json << "\n  ],\n";
   }
@@ -4931,11 +5040,12 @@ void WriteReport(vtkPointSet* mesh, const std::string& output, MeshFormat format
 std::vector<RankFigures> GatherRankFigures(const RankFigures& mine, const ParallelRun& parallel)
 {
   std::vector<RankFigures> all;
-  for (const std::vector<double>& values : parallel.GatherOnFirstRank({ mine.Seconds,
-         static_cast<double>(mine.Cells), static_cast<double>(mine.Points), mine.PeakRssMiB }))
+  for (const std::vector<double>& values :
+    parallel.GatherOnFirstRank({ mine.Seconds, static_cast<double>(mine.Cells),
+      static_cast<double>(mine.Points), mine.PeakRssMiB, static_cast<double>(mine.VoxelsRead) }))
   {
     all.push_back({ values[0], static_cast<long long>(values[1]), static_cast<long long>(values[2]),
-      values[3] });
+      values[3], static_cast<long long>(values[4]) });
   }
   return all;
 }
@@ -4946,10 +5056,11 @@ void PrintRankTable(const std::vector<RankFigures>& ranks)
             << " MPI ranks; each rank's meshing (before the gather or write), its own cells:\n";
   for (std::size_t rank = 0; rank < ranks.size(); ++rank)
   {
-    char line[160];
+    char line[200];
     std::snprintf(line, sizeof(line),
-      "  rank %-4zu %9.3f s %12lld cells %12lld points %10.1f MiB\n", rank, ranks[rank].Seconds,
-      ranks[rank].Cells, ranks[rank].Points, ranks[rank].PeakRssMiB);
+      "  rank %-4zu %9.3f s %12lld cells %12lld points %10.1f MiB %12lld voxels read\n", rank,
+      ranks[rank].Seconds, ranks[rank].Cells, ranks[rank].Points, ranks[rank].PeakRssMiB,
+      ranks[rank].VoxelsRead);
     std::cout << line;
   }
 }
@@ -5161,18 +5272,31 @@ int Run(const Options& options, const ParallelRun& parallel)
 
   StageReport readReport;
   readReport.Name = "read";
-  vtkSmartPointer<vtkImageData> image = ReadImage(input, summary.Image, readReport);
-  if (!options.Merges.empty())
+  // Under MPI each rank reads its own extent of the image (and merges its labels), when the
+  // spacetree filter asks the reader for it; the table's read stage then samples the file.
+  const bool readsPieces = parallel.Ranks() > 1;
+  stmesh::ImageSource imageSource;
+  std::unique_ptr<PieceMerge> pieceMerge;
+  vtkSmartPointer<vtkImageData> image;
+  if (readsPieces)
   {
-    const Clock::time_point mergeStart = Clock::now();
-    image = MergeLabels(image, summary.Image, options, input);
-    readReport.Seconds += SecondsSince(mergeStart);
+    imageSource = OpenLabelImage(input, summary.Image, readReport);
+    image = imageSource.Sample;
+    if (!options.Merges.empty())
+    {
+      pieceMerge = std::unique_ptr<PieceMerge>(
+        new PieceMerge(imageSource.Reader->GetOutputPort(), summary.Image, options));
+    }
   }
-  summary.Stages.push_back(readReport);
+  else
+  {
+    image = ReadMergedImage(input, options, summary.Image, readReport);
+  }
   // The structure report needs the (merged) labels after the meshing; a surface has none.
   ReportImage reportImage;
   const bool inPieces = meshFormat == MeshFormat::PartitionedXML;
-  if (!options.WritesSurface() && !inPieces && parallel.Rank() == 0)
+  const bool reportsStructure = !options.WritesSurface() && !inPieces;
+  if (reportsStructure && !readsPieces)
   {
     reportImage = MakeReportImage(image, summary.Image);
   }
@@ -5184,7 +5308,22 @@ int Run(const Options& options, const ParallelRun& parallel)
     vtkNew<stmImageToSpacetree> spacetree;
     ConfigureSpacetree(spacetree, options, image, summary.Image);
     spacetree->SetSplitIntoPieces(parallel.Ranks() > 1);
-    grid = RunStage(spacetree, image, "building the spacetree", spacetreeReport, true);
+    if (readsPieces)
+    {
+      spacetree->SetInputConnection(
+        pieceMerge ? pieceMerge->Filter->GetOutputPort() : imageSource.Reader->GetOutputPort());
+      grid = RunStage(spacetree, nullptr, "building the spacetree", spacetreeReport, true);
+      readReport.Points = stmesh::CheckImagePiece(imageSource, summary.Image, input);
+      readReport.Description += ", each rank's piece in the spacetree stage";
+      if (pieceMerge)
+      {
+        CheckMergeSourcesSeen(options, SeenOnAnyRank(pieceMerge->Seen, parallel), input);
+      }
+    }
+    else
+    {
+      grid = RunStage(spacetree, image, "building the spacetree", spacetreeReport, true);
+    }
     spacetreeReport.ThinVoxels = static_cast<long long>(spacetree->GetNumberOfThinVoxels());
     if (spacetree->GetNumberOfThinVoxels() > 0)
     {
@@ -5198,7 +5337,11 @@ int Run(const Options& options, const ParallelRun& parallel)
         " corner voxels at voxel size";
     }
   }
-  image = nullptr; // the image is no longer needed: free it before the next stages
+  // The image is no longer needed: free it before the next stages.
+  image = nullptr;
+  pieceMerge.reset();
+  imageSource = stmesh::ImageSource();
+  summary.Stages.push_back(readReport);
   summary.Stages.push_back(spacetreeReport);
   summary.Levels = ReadLevelTable(grid);
 
@@ -5351,6 +5494,7 @@ int Run(const Options& options, const ParallelRun& parallel)
     figures.Cells = static_cast<long long>(mesh->GetNumberOfCells());
     figures.Points = static_cast<long long>(mesh->GetNumberOfPoints());
     figures.PeakRssMiB = PeakRssMiB();
+    figures.VoxelsRead = readReport.Points;
     if (parallel.Sum(figures.Cells) == 0)
     {
       throw Failure("no rank meshed a cell: the body of interest is empty");
@@ -5436,8 +5580,15 @@ int Run(const Options& options, const ParallelRun& parallel)
     std::cout << "structure: not checked for a mesh in pieces; write one file (such as "
                  "-o mesh.vtu) for the report of lost components\n";
   }
-  if (!options.WritesSurface() && !inPieces)
+  if (reportsStructure)
   {
+    if (readsPieces)
+    {
+      // Rank 0 alone, once the others sent it their pieces.
+      StageReport wholeRead;
+      reportImage =
+        MakeReportImage(ReadMergedImage(input, options, summary.Image, wholeRead), summary.Image);
+    }
     const Clock::time_point reportStart = Clock::now();
     summary.Structure = MakeStructureReport(mesh, reportImage, options);
     summary.Structure.Seconds = SecondsSince(reportStart);

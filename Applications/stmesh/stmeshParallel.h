@@ -3,12 +3,12 @@
 #define stmeshParallel_h
 
 // stmesh under MPI (issue 11): `mpiexec -n P stmesh image.nii.gz -o mesh.pvtu`. Every rank reads
-// the image, meshes the root cells of its piece (stmImageToSpacetree::SplitIntoPieces, with two
-// root cells of ghosts, of which the cut keeps one ring of cells), drops its ghost cells and then
-// either writes its piece of a .pvtu (global point ids, point ghosts, a ProcessId array;
-// vtkGenerateGlobalIds and vtkXMLPUnstructuredGridWriter) or sends it to rank 0, which merges the
-// shared points and writes one file (vtkAggregateDataSetFilter). VTK's own parallel filters do the
-// exchanges.
+// its extent of the image (stmesh::OpenImage: the reader stays in the pipeline), meshes the root
+// cells of its piece (stmImageToSpacetree::SplitIntoPieces, with two root cells of ghosts, of which
+// the cut keeps one ring of cells), drops its ghost cells and then either writes its piece of a
+// .pvtu (global point ids, point ghosts, a ProcessId array; vtkGenerateGlobalIds and
+// vtkXMLPUnstructuredGridWriter) or sends it to rank 0, which merges the shared points and writes
+// one file (vtkAggregateDataSetFilter). VTK's own parallel filters do the exchanges.
 
 #include "vtkSmartPointer.h"
 

@@ -270,14 +270,15 @@ std::string GiB(double bytes)
   return text.str();
 }
 
-vtkSmartPointer<vtkImageData> ReadImage(
-  const std::string& path, ImageRole role, ImageInfo& info, double& seconds)
+namespace
 {
-  const bool labelImage = role == ImageRole::Labels;
-  const std::string context = "reading '" + path + "'";
+
+/// The reader of the file's format, checked and set up, its information updated.
+vtkSmartPointer<vtkAlgorithm> CreateImageReader(
+  const std::string& path, ImageRole role, ImageInfo& info, const std::string& context)
+{
   CheckReadableFile(path, role);
   const ImageFormatInfo* format = FindImageFormat(path);
-
   vtkSmartPointer<vtkAlgorithm> reader;
   StandardErrorCapture strayMessages;
   switch (format->Format)
@@ -300,11 +301,31 @@ vtkSmartPointer<vtkImageData> ReadImage(
   }
   info.Format = ImageFormatName(format->Format);
   CheckImageSize(reader, format->Format, path, context);
+  const std::string strayText = strayMessages.GetText();
+  if (!strayText.empty())
+  {
+    Errors().Record(strayText, false);
+  }
+  return reader;
+}
 
+/// Runs the reader for its whole image (extent null) or for an extent of it, and returns its
+/// output; seconds: the time the reader took.
+vtkImageData* UpdateImageReader(
+  vtkAlgorithm* reader, const int* extent, const std::string& context, double& seconds)
+{
+  StandardErrorCapture strayMessages;
   const auto start = std::chrono::steady_clock::now();
   try
   {
-    reader->Update();
+    if (extent)
+    {
+      reader->UpdateExtent(extent);
+    }
+    else
+    {
+      reader->Update();
+    }
   }
   catch (const std::exception& error)
   {
@@ -319,13 +340,26 @@ vtkSmartPointer<vtkImageData> ReadImage(
     Errors().Record(strayText, false);
   }
   ThrowIfFailed(context);
-
   vtkImageData* image = vtkImageData::SafeDownCast(reader->GetOutputDataObject(0));
   if (!image || image->GetNumberOfPoints() == 0)
   {
     throw Failure(context + ": the file holds no image data");
   }
-  image->GetDimensions(info.Dimensions);
+  return image;
+}
+
+/// Checks that the image (the whole image or a piece of it) has one scalar value per voxel and
+/// describes the whole image in info (from the reader's whole extent).
+void DescribeImage(vtkAlgorithm* reader, vtkImageData* image, ImageRole role, ImageInfo& info,
+  const std::string& context)
+{
+  const bool labelImage = role == ImageRole::Labels;
+  int whole[6];
+  reader->GetOutputInformation(0)->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), whole);
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    info.Dimensions[axis] = whole[2 * axis + 1] - whole[2 * axis] + 1;
+  }
   image->GetSpacing(info.Spacing);
   // The spacetree filter reads the active scalars, point data first; stmSeparatingFunction the
   // active point scalars only.
@@ -335,6 +369,7 @@ vtkSmartPointer<vtkImageData> ReadImage(
   {
     throw Failure(context + ": the gray image has no point scalars (one gray value per voxel)");
   }
+  info.CellLabels = false;
   if (!values)
   {
     values = image->GetCellData()->GetScalars();
@@ -373,15 +408,63 @@ vtkSmartPointer<vtkImageData> ReadImage(
     const double intercept = nifti->GetRescaleIntercept();
     if ((slope != 0.0 && slope != 1.0) || intercept != 0.0)
     {
-      Diagnostics() << "stmesh: warning: " << path << ": scl_slope " << slope << " and scl_inter "
-                    << intercept << " are ignored; the " << (labelImage ? "labels" : "gray values")
-                    << " are the stored values\n";
+      Diagnostics() << "stmesh: warning: " << nifti->GetFileName() << ": scl_slope " << slope
+                    << " and scl_inter " << intercept << " are ignored; the "
+                    << (labelImage ? "labels" : "gray values") << " are the stored values\n";
     }
   }
+}
 
+} // namespace
+
+vtkSmartPointer<vtkImageData> ReadImage(
+  const std::string& path, ImageRole role, ImageInfo& info, double& seconds)
+{
+  const std::string context = "reading '" + path + "'";
+  vtkSmartPointer<vtkAlgorithm> reader = CreateImageReader(path, role, info, context);
+  vtkImageData* image = UpdateImageReader(reader, nullptr, context, seconds);
+  DescribeImage(reader, image, role, info, context);
   vtkSmartPointer<vtkImageData> copy = vtkSmartPointer<vtkImageData>::New();
   copy->ShallowCopy(image);
   return copy;
+}
+
+ImageSource OpenImage(const std::string& path, ImageRole role, ImageInfo& info, double& seconds)
+{
+  const std::string context = "reading '" + path + "'";
+  ImageSource source;
+  source.Reader = CreateImageReader(path, role, info, context);
+  ThrowIfFailed(context);
+  int extent[6];
+  source.Reader->GetOutputInformation(0)->Get(
+    vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), extent);
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    // Two points per axis: one voxel of cell labels.
+    extent[2 * axis + 1] = std::min(extent[2 * axis + 1], extent[2 * axis] + 1);
+  }
+  vtkImageData* sample = UpdateImageReader(source.Reader, extent, context, seconds);
+  DescribeImage(source.Reader, sample, role, info, context);
+  // A copy of its own: the reader's next update fills its output anew.
+  source.Sample = vtkSmartPointer<vtkImageData>::New();
+  source.Sample->DeepCopy(sample);
+  return source;
+}
+
+long long CheckImagePiece(const ImageSource& source, const ImageInfo& info, const std::string& path)
+{
+  vtkImageData* piece = vtkImageData::SafeDownCast(source.Reader->GetOutputDataObject(0));
+  const vtkIdType voxels = !piece ? 0
+    : info.CellLabels             ? piece->GetNumberOfCells()
+                                  : piece->GetNumberOfPoints();
+  vtkDataArray* values = piece ? ImageValues(piece, info) : nullptr;
+  if (voxels > 0 && (!values || values->GetNumberOfTuples() != voxels))
+  {
+    throw Failure("reading '" + path + "': the piece of the image has " + std::to_string(voxels) +
+      " voxels but " + std::to_string(values ? values->GetNumberOfTuples() : 0) +
+      " values (truncated file?)");
+  }
+  return static_cast<long long>(voxels);
 }
 
 vtkDataArray* ImageValues(vtkImageData* image, const ImageInfo& info)

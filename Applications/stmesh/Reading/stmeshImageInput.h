@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+class vtkAlgorithm;
 class vtkDataArray;
 class vtkImageData;
 
@@ -77,6 +78,25 @@ std::string GiB(double bytes);
 /// the reader took. The returned copy no longer depends on the reader.
 vtkSmartPointer<vtkImageData> ReadImage(
   const std::string& path, ImageRole role, ImageInfo& info, double& seconds);
+
+/// An image that the ranks of a run under MPI read in pieces: the reader, set up and checked
+/// as ReadImage does, stays in the pipeline, so that the spacetree filter asks it for each
+/// rank's extent only. Sample: the image's first voxel or two along each axis, read to check
+/// the values (one per voxel, their type, point or cell labels) and to find the arrays.
+struct ImageSource
+{
+  vtkSmartPointer<vtkAlgorithm> Reader;
+  vtkSmartPointer<vtkImageData> Sample;
+};
+
+/// Opens an image for reading in pieces; info describes the whole image, seconds is the
+/// sample's read time. Fails as ReadImage does on a file that is not a readable image.
+ImageSource OpenImage(const std::string& path, ImageRole role, ImageInfo& info, double& seconds);
+
+/// After the reader produced a piece: it has one value per voxel (a truncated file may not).
+/// Returns its number of voxels.
+long long CheckImagePiece(
+  const ImageSource& source, const ImageInfo& info, const std::string& path);
 
 /// The scalar array ReadImage found: the point scalars, else the cell scalars.
 vtkDataArray* ImageValues(vtkImageData* image, const ImageInfo& info);
