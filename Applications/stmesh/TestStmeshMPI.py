@@ -538,6 +538,12 @@ def case_errors(c):
     code, out, err = c.run_ranks(2, [c.labels(), "--labels", "9", "-o", c.path("x.pvtu")],
                                  expected_code=1)
     check(T.ERROR_PREFIX in err and "\ntotal " not in out, "no clean failure")
+    # A truncated file, which each rank finds only when it reads its extent, fails every rank.
+    with open(c.labels(), "rb") as whole, open(c.path("cut.nii"), "wb") as cut:
+        cut.write(whole.read()[:60000])
+    code, out, err = c.run_ranks(2, [c.path("cut.nii"), "-o", c.path("c.pvtu")], expected_code=1)
+    check("reading '%s' and building the spacetree" % c.path("cut.nii") in err and
+          "truncated" in err and "\ntotal " not in out, "no clean failure on a truncated file")
 
 
 def case_bound_threads(c):

@@ -5312,7 +5312,8 @@ int Run(const Options& options, const ParallelRun& parallel)
     {
       spacetree->SetInputConnection(
         pieceMerge ? pieceMerge->Filter->GetOutputPort() : imageSource.Reader->GetOutputPort());
-      grid = RunStage(spacetree, nullptr, "building the spacetree", spacetreeReport, true);
+      grid = RunStage(spacetree, nullptr, "reading '" + input + "' and building the spacetree",
+        spacetreeReport, true);
       readReport.Points = stmesh::CheckImagePiece(imageSource, summary.Image, input);
       readReport.Description += ", each rank's piece in the spacetree stage";
       if (pieceMerge)
