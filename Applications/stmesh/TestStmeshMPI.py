@@ -45,10 +45,10 @@ def speck_labels(i, j, k):
     return 1 if (i - 20) ** 2 + (j - 24) ** 2 + (k - 20) ** 2 <= 196 else 0
 
 
-def write_image(c, name, label, spacing):
-    """A uint8 NIfTI label image of DIMENSIONS voxels of the given spacing."""
+def write_image(c, name, label, spacing=(1, 1, 1), dimensions=DIMENSIONS):
+    """A uint8 NIfTI label image of `dimensions` voxels of the given spacing."""
     vtk = T.vtk_modules()
-    image = T.filled_image(vtk, DIMENSIONS, 3, "labels", label)  # VTK_UNSIGNED_CHAR
+    image = T.filled_image(vtk, dimensions, 3, "labels", label)  # VTK_UNSIGNED_CHAR
     image.SetSpacing(*spacing)
     errors = []
     writer = T.watched(vtk["vtkNIFTIImageWriter"](), errors)
@@ -209,29 +209,36 @@ def cell_set(coordinates, cells):
                   for corners, material in cells)
 
 
+def rank_table(out, ranks):
+    """Each rank's own cells and the voxels it read, from rank 0's table of the ranks."""
+    rows = {}
+    for line in out.splitlines():
+        match = re.match(r"  rank (\d+) +[\d.]+ s +(\d+) cells .* (\d+) voxels read$", line)
+        if match:
+            rows[int(match.group(1))] = (int(match.group(2)), int(match.group(3)))
+    check(sorted(rows) == list(range(ranks)), "the table lists ranks %s" % sorted(rows))
+    return [rows[rank] for rank in range(ranks)]
+
+
 def voxels_read(out, ranks):
     """The voxels each rank read, from rank 0's table of the ranks."""
-    counts = {}
-    for line in out.splitlines():
-        match = re.match(r"  rank (\d+) .* (\d+) voxels read$", line)
-        if match:
-            counts[int(match.group(1))] = int(match.group(2))
-    check(sorted(counts) == list(range(ranks)), "the table lists ranks %s" % sorted(counts))
-    return [counts[rank] for rank in range(ranks)]
+    return [voxels for _, voxels in rank_table(out, ranks)]
 
 
 def image_voxels(image):
-    """The voxels of a label image made here: DIMENSIONS, or the cells of the whole extent of a
-    .vti of cell labels."""
-    if image is None or not image.endswith(".vti"):
+    """The voxels of a label image made here: DIMENSIONS (None), a NIfTI's points or the cells
+    of a .vti of cell labels."""
+    if image is None:
         return DIMENSIONS[0] * DIMENSIONS[1] * DIMENSIONS[2]
+    from vtkmodules.vtkIOImage import vtkNIFTIImageReader
     from vtkmodules.vtkIOXML import vtkXMLImageDataReader
-    reader = vtkXMLImageDataReader()
+    cells = image.endswith(".vti")
+    reader = vtkXMLImageDataReader() if cells else vtkNIFTIImageReader()
     reader.SetFileName(image)
     reader.UpdateInformation()
-    extent = reader.GetOutputInformation(0).Get(
-        reader.GetExecutive().WHOLE_EXTENT())
-    return (extent[1] - extent[0]) * (extent[3] - extent[2]) * (extent[5] - extent[4])
+    extent = reader.GetOutputInformation(0).Get(reader.GetExecutive().WHOLE_EXTENT())
+    sizes = [extent[2 * a + 1] - extent[2 * a] + (0 if cells else 1) for a in range(3)]
+    return sizes[0] * sizes[1] * sizes[2]
 
 
 def mesh_with_ranks(c, ranks, name, extra, image=None):
@@ -245,6 +252,7 @@ def mesh_with_ranks(c, ranks, name, extra, image=None):
         check(all(0 < count <= image_voxels(image) for count in voxels),
               "%d ranks read %s voxels of %d" % (ranks, voxels, image_voxels(image)))
     c.voxels_read = voxels if ranks > 1 else None
+    c.rank_cells = [cells for cells, _ in rank_table(out, ranks)] if ranks > 1 else None
     grids = read_pieces(output)
     check(len(grids) == ranks, "%d pieces for %d ranks" % (len(grids), ranks))
     coordinates, cells, volumes = global_mesh(grids)
@@ -336,6 +344,26 @@ def case_merge_cell_labels(c):
     _, _, err = c.run_ranks(2, [path, "--merge", "2,9:7", "-o", c.path("x.pvtu")],
                             expected_code=1)
     check("--merge: source label 9 does not occur" in err, "no error for the absent source")
+
+
+def case_cost_balance(c):
+    # The body fills the first third of a long image. Halved by root cells, rank 1 of 2 would
+    # own no cell; each rank reads a slab of root-cell layers first, the ranks sum the root
+    # cells' costs, and the pieces are cut by cost: 31,196 and 77,818 cells, as the costs of
+    # the whole image cut them (stmesh until 2026-12-07 read it whole on every rank) - root
+    # cells of 16 voxels allow no finer cut. The cells are the one-rank mesh's.
+    image = write_image(c, "quarter.nii", lambda i, j, k: nested_labels(i, j, k) if i < 56 else 0,
+                        dimensions=(160, 48, 40))
+    reference = None
+    for ranks in (1, 2):
+        coordinates, cells, _ = mesh_with_ranks(c, ranks, "q%d" % ranks,
+                                                ["--smooth-iterations", "0"], image)
+        if reference is None:
+            reference = cell_set(coordinates, cells)
+            continue
+        check(cell_set(coordinates, cells) == reference, "2 ranks: not the one-rank cells")
+        check(c.rank_cells == [31196, 77818],
+              "2 ranks own %s cells, not 31,196 and 77,818: not cut by cost" % c.rank_cells)
 
 
 def case_ranks_default(c):
@@ -484,16 +512,9 @@ def case_empty_pieces(c):
     # their ghost box. Those ranks mesh nothing, quietly (no error, no warning of an empty cut),
     # write no piece file (the .pvtu names the others), and the union is the one-rank mesh: the
     # same cells by coordinates without smoothing, the same volumes smoothed.
-    vtk = T.vtk_modules()
-    image = T.filled_image(vtk, (160, 48, 40), 3, "labels",
-                           lambda i, j, k: 1 if (i - 6) ** 2 + (j - 24) ** 2 + (k - 20) ** 2 < 25
-                           else 0)
-    errors = []
-    writer = T.watched(vtk["vtkNIFTIImageWriter"](), errors)
-    writer.SetInputData(image)
-    writer.SetFileName(c.path("corner.nii"))
-    writer.Write()
-    check(not errors, "cannot write corner.nii: %s" % errors)
+    write_image(c, "corner.nii",
+                lambda i, j, k: 1 if (i - 6) ** 2 + (j - 24) ** 2 + (k - 20) ** 2 < 25 else 0,
+                dimensions=(160, 48, 40))
     for extra in (["--smooth-iterations", "0"], []):
         meshes = {}
         for ranks in (1, 6):

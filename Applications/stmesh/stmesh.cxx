@@ -2401,6 +2401,12 @@ void ConfigureSpacetree(stmImageToSpacetree* spacetree, const Options& options, 
   {
     spacetree->AddBodyLabel(label);
   }
+  if (info.CellLabels)
+  {
+    // Known before the voxels arrive: under MPI the pieces' extents are requested by it.
+    spacetree->SetInputArrayToProcess(
+      0, 0, 0, vtkDataObject::FIELD_ASSOCIATION_CELLS, vtkDataSetAttributes::SCALARS);
+  }
   spacetree->SetMaxCellSize(options.MaxCellSize);
   spacetree->SetThinPartRefinement(options.ThinPartMode());
   const bool threeD = info.SpannedAxes.size() == 3;

@@ -240,6 +240,8 @@ struct PieceLayout
   int Dimension = 0;
   int ImageAxes[3] = { 0, 1, 2 };
   long long RootVoxels[3] = { 1, 1, 1 };
+  /// The whole image's root grid, per spacetree axis.
+  long long RootGrid[3] = { 1, 1, 1 };
   long long OwnedLower[3] = { 0, 0, 0 };
   long long OwnedUpper[3] = { 0, 0, 0 };
   long long GhostLower[3] = { 0, 0, 0 };
@@ -262,13 +264,23 @@ stm::MaterialImage<Dim> ImageOfVoxels(const std::vector<stm::MaterialIndex>& mat
   return image;
 }
 
+/// Where a piece's layout finds the costs of the root cells: nowhere (the boxes are halved by
+/// root cells), the whole root grid's costs that the ranks summed over their slabs
+/// (stmImageToSpacetree::RequestData's first pass), or the whole image's materials to estimate
+/// them from (with an executor).
+struct RootCellCostSource
+{
+  const std::vector<long long>* Summed = nullptr;
+  const std::vector<stm::MaterialIndex>* WholeImage = nullptr;
+  stmSMPExecutor* Executor = nullptr;
+};
+
 /// Lays out piece `piece` of `pieces` of an image of layout.WholeVoxelDims voxels, with the root
-/// cells the whole image's plan gives; balanced by the cost of the root cells when the whole
-/// image's materials (`wholeImage`, with an executor) are given (stm::RootCellCosts).
+/// cells the whole image's plan gives; balanced by the cost of the root cells where `costs`
+/// has them (stm::RootCellCosts).
 template <int Dim>
 bool LayOutPiece(const RefinementRequest& request, const stmSpacetreeGeometry& geometry, int pieces,
-  int piece, const std::vector<stm::MaterialIndex>* wholeImage, stmSMPExecutor* executor,
-  PieceLayout& layout, std::string& error)
+  int piece, const RootCellCostSource& costs, PieceLayout& layout, std::string& error)
 {
   stm::RefinementPlanOptions<Dim> options;
   if (!MakePlanOptions<Dim>(request, geometry, options, error))
@@ -292,18 +304,27 @@ bool LayOutPiece(const RefinementRequest& request, const stmSpacetreeGeometry& g
     layout.RootVoxels[axis] = plan.CellSizes[0][axis] / plan.VoxelSubdivision[axis];
   }
   const stm::LatticeIndex<Dim> rootDims = plan.RootGridDimensions(dims);
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    layout.RootGrid[axis] = rootDims[axis];
+  }
   stm::RootBox<Dim> owned;
-  if (wholeImage && executor)
+  if (costs.Summed)
+  {
+    owned = stm::PieceRootBox<Dim>(rootDims, pieces, piece,
+      std::vector<std::int64_t>(costs.Summed->begin(), costs.Summed->end()));
+  }
+  else if (costs.WholeImage && costs.Executor)
   {
     stm::LatticeIndex<Dim> rootVoxels;
     for (int axis = 0; axis < Dim; ++axis)
     {
       rootVoxels[axis] = layout.RootVoxels[axis];
     }
-    const std::vector<std::int64_t> costs =
-      stm::RootCellCosts<Dim>(ImageOfVoxels<Dim>(*wholeImage, layout.WholeVoxelDims, geometry),
-        rootVoxels, rootDims, *executor);
-    owned = stm::PieceRootBox<Dim>(rootDims, pieces, piece, costs);
+    const std::vector<std::int64_t> estimated = stm::RootCellCosts<Dim>(
+      ImageOfVoxels<Dim>(*costs.WholeImage, layout.WholeVoxelDims, geometry), rootVoxels, rootDims,
+      *costs.Executor);
+    owned = stm::PieceRootBox<Dim>(rootDims, pieces, piece, estimated);
   }
   else
   {
@@ -621,8 +642,7 @@ bool BuildTree(const std::vector<stm::MaterialIndex>& materials, const int voxel
 /// from the image's information (inInfo); false with `error` when it cannot.
 bool LayOutRequestedPiece(stmImageToSpacetree* filter, vtkInformation* outInfo,
   vtkInformation* inInfo, bool cellLabels, const double* direction, PieceLayout& piece,
-  std::string& error, const std::vector<stm::MaterialIndex>* wholeImage = nullptr,
-  stmSMPExecutor* executor = nullptr, int number = -1)
+  std::string& error, const RootCellCostSource& costs = RootCellCostSource(), int number = -1)
 {
   using Pipeline = vtkStreamingDemandDrivenPipeline;
   piece = PieceLayout();
@@ -665,8 +685,8 @@ bool LayOutRequestedPiece(stmImageToSpacetree* filter, vtkInformation* outInfo,
     number = stmPieces::RequestedPiece(outInfo);
   }
   return geometry.Dimension == 3
-    ? LayOutPiece<3>(request, geometry, pieces, number, wholeImage, executor, piece, error)
-    : LayOutPiece<2>(request, geometry, pieces, number, wholeImage, executor, piece, error);
+    ? LayOutPiece<3>(request, geometry, pieces, number, costs, piece, error)
+    : LayOutPiece<2>(request, geometry, pieces, number, costs, piece, error);
 }
 
 /// Whether the label array selection names a cell array (known before the data arrive).
@@ -675,6 +695,99 @@ bool LabelsAreCellData(vtkAlgorithm* filter)
   vtkInformation* selection = filter->GetInputArrayInformation(0);
   return selection && selection->Has(vtkDataObject::FIELD_ASSOCIATION()) &&
     selection->Get(vtkDataObject::FIELD_ASSOCIATION()) == vtkDataObject::FIELD_ASSOCIATION_CELLS;
+}
+
+/// The selected label array, or where the selection is empty (as when ParaView sets the
+/// property before the image has arrays) the active scalars, point data first.
+vtkDataArray* LabelsOrScalars(vtkImageData* input, vtkDataArray* selected, int& association)
+{
+  if (selected)
+  {
+    return selected;
+  }
+  association = vtkDataObject::FIELD_ASSOCIATION_POINTS;
+  if (vtkDataArray* scalars = input->GetPointData()->GetScalars())
+  {
+    return scalars;
+  }
+  association = vtkDataObject::FIELD_ASSOCIATION_CELLS;
+  return input->GetCellData()->GetScalars();
+}
+
+/// Rank `rank` of `ranks`'s slab for the root cells' costs: its share [firstLayer, endLayer)
+/// of the root-cell layers along the last spacetree axis, and `extent`, the image's extent
+/// that holds them, the whole image along the other axes and two points more along that one
+/// (the next voxels of the last row, and the point cell labels need for them); an empty
+/// extent for a rank without layers.
+void SlabOfRank(const PieceLayout& piece, int rank, int ranks, long long& firstLayer,
+  long long& endLayer, int extent[6])
+{
+  const int last = piece.Dimension - 1;
+  const long long layers = piece.RootGrid[last];
+  firstLayer = rank * layers / ranks;
+  endLayer = (rank + 1) * layers / ranks;
+  const int empty[6] = { 0, -1, 0, -1, 0, -1 };
+  std::copy(firstLayer < endLayer ? piece.WholeExtent : empty,
+    (firstLayer < endLayer ? piece.WholeExtent : empty) + 6, extent);
+  if (firstLayer >= endLayer)
+  {
+    return;
+  }
+  const int axis = piece.ImageAxes[last];
+  const long long lower = piece.WholeExtent[2 * axis];
+  extent[2 * axis] = static_cast<int>(lower + firstLayer * piece.RootVoxels[last]);
+  extent[2 * axis + 1] = static_cast<int>(std::min<long long>(
+    piece.WholeExtent[2 * axis + 1], lower + endLayer * piece.RootVoxels[last] + 1));
+}
+
+/// The costs of the root cells in layers [firstLayer, endLayer) (SlabOfRank), from the input's
+/// materials (voxelDims voxels per image axis, its first voxel `inputFirst` voxels from the
+/// whole image's), of the whole root grid; all zero where the input does not hold the slab.
+/// The slab is the whole image along every axis but the last spanned one, after which the
+/// image has one voxel only: a run of the input's rows, read in place.
+template <int Dim>
+std::vector<std::int64_t> SlabCosts(const PieceLayout& piece,
+  const std::vector<stm::MaterialIndex>& materials, const int voxelDims[3],
+  const long long inputFirst[3], long long firstLayer, long long endLayer, stmSMPExecutor& executor)
+{
+  stm::LatticeIndex<Dim> rootVoxels;
+  stm::LatticeIndex<Dim> rootGrid;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    rootVoxels[axis] = piece.RootVoxels[axis];
+    rootGrid[axis] = piece.RootGrid[axis];
+  }
+  std::vector<std::int64_t> none(
+    static_cast<std::size_t>(stm::NumberOfLatticeCells<Dim>(rootGrid)), 0);
+  stm::MaterialImage<Dim> slab;
+  long long rowsBefore = 0; // of the input, along the last axis, before the slab's first
+  long long rowSize = 1;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    const int imageAxis = piece.ImageAxes[axis];
+    const long long whole = piece.WholeVoxelDims[imageAxis];
+    if (axis < Dim - 1)
+    {
+      if (inputFirst[imageAxis] != 0 || voxelDims[imageAxis] != whole)
+      {
+        return none;
+      }
+      slab.Dimensions[axis] = whole;
+      rowSize *= whole;
+      continue;
+    }
+    const long long lower = firstLayer * rootVoxels[axis];
+    const long long upper = std::min(whole, endLayer * rootVoxels[axis] + 1);
+    rowsBefore = lower - inputFirst[imageAxis];
+    if (lower >= upper || rowsBefore < 0 || rowsBefore + (upper - lower) > voxelDims[imageAxis])
+    {
+      return none;
+    }
+    slab.Dimensions[axis] = upper - lower;
+  }
+  slab.Values = materials.data() + rowsBefore * rowSize;
+  return stm::RootCellCostsOfLayers<Dim>(
+    slab, firstLayer, endLayer, rootVoxels, rootGrid, executor);
 }
 
 /// A piece's own voxels and those it reads for a classification in pieces (its ghost box grown by
@@ -712,9 +825,9 @@ template <int Dim>
 bool ClassifyVoxelsInPieces(vtkMultiProcessController* controller, stmImageToSpacetree* filter,
   vtkInformation* outInfo, vtkInformation* inInfo, bool cellLabels, const double* direction,
   const std::vector<stm::MaterialIndex>& materials, const int voxelDims[3],
-  const long long inputFirst[3], bool bodyOnly, stmSMPExecutor& executor,
-  std::vector<std::uint8_t>& thin, std::vector<std::uint8_t>& minorityCorner,
-  std::int64_t& wholeThinVoxels, std::string& error)
+  const long long inputFirst[3], bool bodyOnly, const RootCellCostSource& costs,
+  stmSMPExecutor& executor, std::vector<std::uint8_t>& thin,
+  std::vector<std::uint8_t>& minorityCorner, std::int64_t& wholeThinVoxels, std::string& error)
 {
   const int ranks = controller->GetNumberOfProcesses();
   const int rank = controller->GetLocalProcessId();
@@ -724,8 +837,8 @@ bool ClassifyVoxelsInPieces(vtkMultiProcessController* controller, stmImageToSpa
   bool ok = true;
   for (int r = 0; r < ranks && ok; ++r)
   {
-    ok = LayOutRequestedPiece(
-      filter, outInfo, inInfo, cellLabels, direction, layout, error, nullptr, nullptr, r);
+    ok = LayOutRequestedPiece(filter, outInfo, inInfo, cellLabels, direction, layout, error,
+      RootCellCostSource{ costs.Summed }, r);
     PieceVoxelBoxes<Dim>(layout, owned[r], read[r]);
   }
   stm::LatticeIndex<Dim> wholeDims;
@@ -830,13 +943,14 @@ enum class Classification
 
 /// The vote of the ranks that mesh their own pieces with thin-part refinement and, unless every
 /// rank has the whole image, ClassifyVoxelsInPieces (collective). The input's voxels
-/// (`materials`, voxelDims) have the extent `extent` of the image whose piece `piece` is.
+/// (`materials`, voxelDims) have the extent `extent` of the image whose piece `piece` is, laid
+/// out by `costs`.
 Classification ClassifyTogether(stmThinPartExchange::Vote& vote, stmImageToSpacetree* filter,
   vtkInformation* outInfo, vtkInformation* inInfo, bool cellLabels, const double* direction,
-  const PieceLayout& piece, const int extent[6], const int voxelDims[3],
-  const std::vector<stm::MaterialIndex>& materials, stmSMPExecutor& executor,
-  std::vector<std::uint8_t>& thin, std::vector<std::uint8_t>& minorityCorner,
-  std::int64_t& wholeThinVoxels, std::string& error)
+  const PieceLayout& piece, const RootCellCostSource& costs, const int extent[6],
+  const int voxelDims[3], const std::vector<stm::MaterialIndex>& materials,
+  stmSMPExecutor& executor, std::vector<std::uint8_t>& thin,
+  std::vector<std::uint8_t>& minorityCorner, std::int64_t& wholeThinVoxels, std::string& error)
 {
   bool whole = true;
   long long inputFirst[3];
@@ -858,11 +972,11 @@ Classification ClassifyTogether(stmThinPartExchange::Vote& vote, stmImageToSpace
   const bool bodyOnly = filter->GetThinPartRefinement() == stmImageToSpacetree::THIN_BODY_PARTS;
   const bool classified = piece.Dimension == 3
     ? ClassifyVoxelsInPieces<3>(vote.GetController(), filter, outInfo, inInfo, cellLabels,
-        direction, materials, voxelDims, inputFirst, bodyOnly, executor, thin, minorityCorner,
-        wholeThinVoxels, error)
+        direction, materials, voxelDims, inputFirst, bodyOnly, costs, executor, thin,
+        minorityCorner, wholeThinVoxels, error)
     : ClassifyVoxelsInPieces<2>(vote.GetController(), filter, outInfo, inInfo, cellLabels,
-        direction, materials, voxelDims, inputFirst, bodyOnly, executor, thin, minorityCorner,
-        wholeThinVoxels, error);
+        direction, materials, voxelDims, inputFirst, bodyOnly, costs, executor, thin,
+        minorityCorner, wholeThinVoxels, error);
   return classified ? Classification::Together : Classification::Failed;
 }
 } // namespace
@@ -1051,7 +1165,9 @@ int stmImageToSpacetree::RequestUpdateExtent(
     : nullptr;
   PieceLayout piece;
   std::string error;
-  if (!LayOutRequestedPiece(this, outInfo, inInfo, cellLabels, direction, piece, error) ||
+  RootCellCostSource costs;
+  costs.Summed = this->HasSummedRootCellCosts ? &this->SummedRootCellCosts : nullptr;
+  if (!LayOutRequestedPiece(this, outInfo, inInfo, cellLabels, direction, piece, error, costs) ||
     !piece.Split)
   {
     // RequestData reports a failed layout.
@@ -1059,6 +1175,18 @@ int stmImageToSpacetree::RequestUpdateExtent(
     return 1;
   }
   int extent[6] = { 0, -1, 0, -1, 0, -1 };
+  vtkMultiProcessController* controller = stmPieces::ControllerOfPieces(outInfo);
+  if (controller && !costs.Summed)
+  {
+    // The first of two passes: each rank reads its slab of the image, for the costs of the
+    // root cells (SumRootCellCostsOverSlabs).
+    long long firstLayer = 0;
+    long long endLayer = 0;
+    SlabOfRank(piece, controller->GetLocalProcessId(), controller->GetNumberOfProcesses(),
+      firstLayer, endLayer, extent);
+    stmPieces::RequestImageExtent(inInfo, extent);
+    return 1;
+  }
   if (!piece.Empty)
   {
     std::copy(piece.WholeExtent, piece.WholeExtent + 6, extent);
@@ -1068,8 +1196,7 @@ int stmImageToSpacetree::RequestUpdateExtent(
   // When every rank meshes its own piece, the ranks classify the voxels together, each reading
   // its ghost box grown by one voxel (ClassifyVoxelsInPieces); a pipeline that asks one process
   // for several pieces gets the whole image, which RequestData classifies before it crops.
-  const bool classifyTogether =
-    this->ThinPartRefinement != NO_THIN_PARTS && stmPieces::ControllerOfPieces(outInfo) != nullptr;
+  const bool classifyTogether = this->ThinPartRefinement != NO_THIN_PARTS && controller != nullptr;
   if (!piece.Empty && (this->ThinPartRefinement == NO_THIN_PARTS || classifyTogether))
   {
     const int grown = classifyTogether ? 1 : 0;
@@ -1088,8 +1215,103 @@ int stmImageToSpacetree::RequestUpdateExtent(
   return 1;
 }
 
-int stmImageToSpacetree::RequestData(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+int stmImageToSpacetree::SumRootCellCostsOverSlabs(vtkInformation* request,
+  vtkInformationVector** inputVector, vtkInformationVector* outputVector,
+  vtkMultiProcessController* controller)
+{
+  vtkImageData* input = vtkImageData::GetData(inputVector[0], 0);
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
+  // This rank's slab's costs, left at zero where it cannot tell them (an unusable label array:
+  // the second pass reports it); every rank takes part in the sums all the same.
+  std::vector<std::int64_t> costs;
+  PieceLayout piece;
+  std::string error;
+  int association = -1;
+  vtkDataArray* labels = input
+    ? LabelsOrScalars(input, this->GetInputArrayToProcess(0, inputVector, association), association)
+    : nullptr;
+  const bool cellLabels = association == vtkDataObject::FIELD_ASSOCIATION_CELLS;
+  if (labels && labels->GetNumberOfComponents() == 1 && IsLabelType(labels->GetDataType()) &&
+    LayOutRequestedPiece(
+      this, outInfo, inInfo, cellLabels, input->GetDirectionMatrix()->GetData(), piece, error) &&
+    piece.Split)
+  {
+    int pointDims[3];
+    input->GetDimensions(pointDims);
+    int extent[6];
+    input->GetExtent(extent);
+    int voxelDims[3];
+    long long inputFirst[3];
+    for (int axis = 0; axis < 3; ++axis)
+    {
+      voxelDims[axis] = VoxelsAlong(pointDims[axis], cellLabels);
+      inputFirst[axis] = extent[2 * axis] - piece.WholeExtent[2 * axis];
+    }
+    std::vector<long long> body(this->BodyLabels.begin(), this->BodyLabels.end());
+    if (body.empty())
+    {
+      CollectLabels collect;
+      if (!vtkArrayDispatch::DispatchByValueType<vtkArrayDispatch::Integrals>::Execute(
+            labels, collect))
+      {
+        collect(labels);
+      }
+      for (long long label : collect.Labels)
+      {
+        if (label != this->BackgroundLabel)
+        {
+          body.push_back(label);
+        }
+      }
+    }
+    std::sort(body.begin(), body.end());
+    body.erase(std::unique(body.begin(), body.end()), body.end());
+    const vtkIdType voxels = static_cast<vtkIdType>(voxelDims[0]) * voxelDims[1] * voxelDims[2];
+    if (!body.empty() && body.size() <= 65535 && labels->GetNumberOfTuples() == voxels)
+    {
+      std::vector<stm::MaterialIndex> materials(static_cast<std::size_t>(voxels));
+      MapToMaterials map{ &body, &materials };
+      if (!vtkArrayDispatch::DispatchByValueType<vtkArrayDispatch::Integrals>::Execute(labels, map))
+      {
+        map(labels);
+      }
+      long long firstLayer = 0;
+      long long endLayer = 0;
+      int slabExtent[6];
+      SlabOfRank(piece, controller->GetLocalProcessId(), controller->GetNumberOfProcesses(),
+        firstLayer, endLayer, slabExtent);
+      stmSMPExecutor executor(this);
+      costs = piece.Dimension == 3
+        ? SlabCosts<3>(piece, materials, voxelDims, inputFirst, firstLayer, endLayer, executor)
+        : SlabCosts<2>(piece, materials, voxelDims, inputFirst, firstLayer, endLayer, executor);
+    }
+  }
+  long long size = static_cast<long long>(costs.size());
+  long long largest = 0;
+  controller->AllReduce(&size, &largest, 1, vtkCommunicator::MAX_OP);
+  std::vector<long long> mine(static_cast<std::size_t>(largest), 0);
+  if (size == largest)
+  {
+    std::copy(costs.begin(), costs.end(), mine.begin());
+  }
+  this->SummedRootCellCosts.assign(mine.size(), 0);
+  controller->AllReduce(mine.data(), this->SummedRootCellCosts.data(),
+    static_cast<vtkIdType>(largest), vtkCommunicator::SUM_OP);
+  this->HasSummedRootCellCosts = true;
+  // The executive calls RequestUpdateExtent again, which now lays the pieces out by the costs,
+  // and then RequestData for the piece.
+  request->Set(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING(), 1);
+  if (vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0))
+  {
+    output->Initialize();
+  }
+  this->UpdateProgress(0.02);
+  return 1;
+}
+
+int stmImageToSpacetree::RequestData(vtkInformation* pipelineRequest,
+  vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   vtkImageData* input = vtkImageData::GetData(inputVector[0], 0);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
@@ -1100,6 +1322,29 @@ int stmImageToSpacetree::RequestData(
     output->Initialize(); // piece 0 meshes the whole image
     return 1;
   }
+  // When every rank meshes its own piece, a first pass sums the root cells' costs over slabs of
+  // the image, so that the pieces are balanced by cost without any rank reading the whole
+  // image; this second pass uses them, and forgets them when it returns.
+  vtkMultiProcessController* controller =
+    splitting ? stmPieces::ControllerOfPieces(outInfo) : nullptr;
+  if (controller && !this->HasSummedRootCellCosts)
+  {
+    return this->SumRootCellCostsOverSlabs(pipelineRequest, inputVector, outputVector, controller);
+  }
+  struct ForgetSummedCosts
+  {
+    bool* Has;
+    std::vector<long long>* Costs;
+    vtkInformation* Request;
+    ~ForgetSummedCosts()
+    {
+      *this->Has = false;
+      this->Costs->clear();
+      this->Request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+    }
+  } forget{ &this->HasSummedRootCellCosts, &this->SummedRootCellCosts, pipelineRequest };
+  RootCellCostSource costs;
+  costs.Summed = controller ? &this->SummedRootCellCosts : nullptr;
   if (!input || !output)
   {
     vtkErrorMacro("ImageToSpacetree needs a vtkImageData input.");
@@ -1117,7 +1362,7 @@ int stmImageToSpacetree::RequestData(
     // As RequestUpdateExtent laid it out; a piece without root cells got no voxels.
     std::string error;
     if (!LayOutRequestedPiece(this, outInfo, inputVector[0]->GetInformationObject(0),
-          assumedCellLabels, input->GetDirectionMatrix()->GetData(), piece, error))
+          assumedCellLabels, input->GetDirectionMatrix()->GetData(), piece, error, costs))
     {
       vtkErrorMacro("ImageToSpacetree failed: " << error);
       return 0;
@@ -1150,18 +1395,7 @@ int stmImageToSpacetree::RequestData(
     vtkErrorMacro("The image has no array named \"" << selectedName << "\".");
     return 0;
   }
-  if (!labels)
-  {
-    // An empty array selection, as when ParaView sets the property before the image has
-    // arrays: fall back to the active scalars, point data first.
-    labels = input->GetPointData()->GetScalars();
-    association = vtkDataObject::FIELD_ASSOCIATION_POINTS;
-    if (!labels)
-    {
-      labels = input->GetCellData()->GetScalars();
-      association = vtkDataObject::FIELD_ASSOCIATION_CELLS;
-    }
-  }
+  labels = LabelsOrScalars(input, labels, association);
   if (!labels)
   {
     vtkErrorMacro("No label array: select an integer point or cell array of the image.");
@@ -1229,7 +1463,7 @@ int stmImageToSpacetree::RequestData(
     std::string error;
     if (cellLabels != assumedCellLabels &&
       !LayOutRequestedPiece(this, outInfo, inputVector[0]->GetInformationObject(0), cellLabels,
-        direction, piece, error))
+        direction, piece, error, costs))
     {
       vtkErrorMacro("ImageToSpacetree failed: " << error);
       return 0;
@@ -1311,7 +1545,7 @@ int stmImageToSpacetree::RequestData(
           std::string error;
           stmSMPExecutor executor(this);
           if (ClassifyTogether(vote, this, outInfo, inputVector[0]->GetInformationObject(0),
-                cellLabels, direction, piece, extent, voxelDims, background, executor, thin,
+                cellLabels, direction, piece, costs, extent, voxelDims, background, executor, thin,
                 minorityCorner, wholeThinVoxels, error) == Classification::Failed &&
             !this->GetAbortExecute())
           {
@@ -1512,9 +1746,10 @@ int stmImageToSpacetree::RequestData(
       stmSMPExecutor classifier(this);
       classifier.SetProgressRange(0.25, 0.4);
       std::string classifyError;
-      classification = ClassifyTogether(vote, this, outInfo,
-        inputVector[0]->GetInformationObject(0), cellLabels, direction, piece, extent, voxelDims,
-        materials, classifier, thin, minorityCorner, request.WholeThinVoxels, classifyError);
+      classification =
+        ClassifyTogether(vote, this, outInfo, inputVector[0]->GetInformationObject(0), cellLabels,
+          direction, piece, costs, extent, voxelDims, materials, classifier, thin, minorityCorner,
+          request.WholeThinVoxels, classifyError);
       if (classification == Classification::Failed)
       {
         if (!this->GetAbortExecute())
@@ -1559,9 +1794,15 @@ int stmImageToSpacetree::RequestData(
       }
       std::string layoutError;
       stmSMPExecutor estimator(this);
+      RootCellCostSource wholeCosts = costs;
+      if (!wholeCosts.Summed)
+      {
+        wholeCosts.WholeImage = &materials;
+        wholeCosts.Executor = &estimator;
+      }
       if (whole &&
         !LayOutRequestedPiece(this, outInfo, inputVector[0]->GetInformationObject(0), cellLabels,
-          direction, piece, layoutError, &materials, &estimator))
+          direction, piece, layoutError, wholeCosts))
       {
         vtkErrorMacro("ImageToSpacetree failed: " << layoutError);
         return 0;

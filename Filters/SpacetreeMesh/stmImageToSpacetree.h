@@ -53,6 +53,7 @@
 #include <vector> // for the body labels
 
 class vtkImplicitFunction;
+class vtkMultiProcessController;
 
 class SPACETREEMESHFILTERS_EXPORT stmImageToSpacetree : public vtkUnstructuredGridAlgorithm
 {
@@ -225,10 +226,13 @@ public:
   /**
    * When the pipeline asks for piece k of n > 1, build only that piece's part of the tree (its
    * box of root cells and a ghost layer of two root cells) instead of the whole tree on piece 0.
-   * Needs the whole image's extent from upstream; Grading is not supported with it. Each piece
-   * reads the voxels of its ghost box, or with ThinPartRefinement the whole image, whose whole
-   * components decide which parts are thin; with the whole image the boxes are balanced by the
-   * cells their voxels will make (stm::RootCellCosts). Default off.
+   * Needs the whole image's extent from upstream; Grading is not supported with it. When every
+   * rank of the global controller asks for its own piece, the ranks first sum the cells their
+   * root cells' voxels will make, each from a slab of the image (stm::RootCellCostsOfLayers),
+   * and the boxes are balanced by those costs; each piece then reads the voxels of its ghost box
+   * (grown by one voxel with ThinPartRefinement: the ranks classify the thin parts together).
+   * A pipeline that asks one process for several pieces halves the boxes by root cells, or with
+   * ThinPartRefinement reads the whole image and balances them by its costs. Default off.
    */
   vtkSetMacro(SplitIntoPieces, bool);
   vtkGetMacro(SplitIntoPieces, bool);
@@ -246,6 +250,7 @@ protected:
   /// SplitIntoPieces, the voxels of the piece's root cells and its ghost layer; with
   /// ThinPartRefinement grown by one voxel when every rank meshes its own piece (the ranks
   /// classify the thin parts together), else the whole image (classified before the crop).
+  /// When every rank meshes its own piece, first the rank's slab (SumRootCellCostsOverSlabs).
   int RequestUpdateExtent(vtkInformation* request, vtkInformationVector** inputVector,
     vtkInformationVector* outputVector) override;
   int RequestData(vtkInformation* request, vtkInformationVector** inputVector,
@@ -268,6 +273,16 @@ protected:
   vtkIdType NumberOfMinorityCornerVoxels = 0;
 
 private:
+  /// The first of two passes when every rank meshes its own piece: each rank reads its slab of
+  /// root-cell layers, and the ranks sum the costs of the root cells (stm::RootCellCostsOfLayers)
+  /// for the second pass, which lays the pieces out by them (CONTINUE_EXECUTING).
+  int SumRootCellCostsOverSlabs(vtkInformation* request, vtkInformationVector** inputVector,
+    vtkInformationVector* outputVector, vtkMultiProcessController* controller);
+
+  // The whole root grid's costs from the first pass; the second pass forgets them.
+  std::vector<long long> SummedRootCellCosts;
+  bool HasSummedRootCellCosts = false;
+
   stmImageToSpacetree(const stmImageToSpacetree&) = delete;
   void operator=(const stmImageToSpacetree&) = delete;
 };

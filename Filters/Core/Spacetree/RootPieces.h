@@ -248,61 +248,82 @@ RootBox<Dim> PieceRootBox(const LatticeIndex<Dim>& rootGridDimensions, int piece
 constexpr std::int64_t BoundaryVoxelCost = 16;
 constexpr std::int64_t BodyVoxelCost = 1;
 
+/// RootCellCosts of the root-cell layers [firstLayer, endLayer) along the last axis only, from a
+/// slab of the image: its voxels from the first voxel of layer firstLayer on, of which those
+/// past the layers (one row more, where the image goes on) only serve as the next voxels of the
+/// last row. The costs are of the whole root grid, zero outside the layers, so that slabs that
+/// share out the layers add up to the whole image's RootCellCosts: the processes that mesh
+/// pieces of an image they read in parts balance them by cost without reading it whole. All
+/// zero where the slab does not fit the layers (no cost: PieceRootBox without costs).
 template <int Dim, class Executor>
-std::vector<std::int64_t> RootCellCosts(const MaterialImage<Dim>& image,
-  const LatticeIndex<Dim>& rootVoxels, const LatticeIndex<Dim>& rootGridDimensions,
-  Executor& executor)
+std::vector<std::int64_t> RootCellCostsOfLayers(const MaterialImage<Dim>& slab,
+  std::int64_t firstLayer, std::int64_t endLayer, const LatticeIndex<Dim>& rootVoxels,
+  const LatticeIndex<Dim>& rootGridDimensions, Executor& executor)
 {
   static_assert(Dim >= 2, "rows of voxels need a second axis");
-  const LatticeIndex<Dim>& dims = image.Dimensions;
+  constexpr int last = Dim - 1;
+  const LatticeIndex<Dim>& size = slab.Dimensions;
   std::vector<std::int64_t> costs(
     static_cast<std::size_t>(NumberOfLatticeCells<Dim>(rootGridDimensions)), 0);
-  if (NumberOfLatticeCells<Dim>(dims) <= 0 || costs.empty())
+  if (NumberOfLatticeCells<Dim>(size) <= 0 || costs.empty() || firstLayer < 0 ||
+    endLayer > rootGridDimensions[last] || firstLayer >= endLayer)
   {
     return costs;
   }
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    // The slab covers its layers' rows and at most one row more along the last axis.
+    const std::int64_t spanned = axis == last ? (endLayer - firstLayer) * rootVoxels[axis] + 1
+                                              : rootGridDimensions[axis] * rootVoxels[axis];
+    if (rootVoxels[axis] < 1 || spanned < size[axis])
+    {
+      return costs;
+    }
+  }
   // One task per layer of root cells along the last axis: a task writes only its own layer's
   // costs.
-  constexpr int last = Dim - 1;
   struct Kernel
   {
     using Scratch = NoScratch;
     const MaterialImage<Dim>* Image;
     LatticeIndex<Dim> RootVoxels;
     LatticeIndex<Dim> RootDims;
+    std::int64_t FirstLayer;
+    std::int64_t CountedRows; // along the last axis; a row more is only looked at
     std::int64_t* Costs;
     void operator()(Scratch&, std::int64_t begin, std::int64_t end) const
     {
-      const LatticeIndex<Dim>& size = this->Image->Dimensions;
-      LatticeIndex<Dim> rowDims = size; // the rows of voxels: every axis but the first
+      const LatticeIndex<Dim>& dims = this->Image->Dimensions;
+      LatticeIndex<Dim> rowDims = dims; // the rows of voxels: every axis but the first
       rowDims[0] = 1;
       LatticeIndex<Dim> strides{};
       strides[0] = 1;
       for (int axis = 1; axis < Dim; ++axis)
       {
-        strides[axis] = strides[axis - 1] * size[axis - 1];
+        strides[axis] = strides[axis - 1] * dims[axis - 1];
       }
       for (std::int64_t layer = begin; layer < end; ++layer)
       {
         LatticeIndex<Dim> rowLower{};
         LatticeIndex<Dim> rowUpper = rowDims;
-        rowLower[last] = std::min(size[last], layer * this->RootVoxels[last]);
-        rowUpper[last] = std::min(size[last], (layer + 1) * this->RootVoxels[last]);
+        rowLower[last] = std::min(this->CountedRows, layer * this->RootVoxels[last]);
+        rowUpper[last] = std::min(this->CountedRows, (layer + 1) * this->RootVoxels[last]);
         ForEachLatticePoint<Dim>(rowLower, rowUpper,
           [&](const LatticeIndex<Dim>& row)
           {
-            const MaterialIndex* values = this->Image->Values + LinearIndex<Dim>(row, size);
+            const MaterialIndex* values = this->Image->Values + LinearIndex<Dim>(row, dims);
             LatticeIndex<Dim> root{};
             bool atEnd[Dim] = {};
             for (int axis = 1; axis < Dim; ++axis)
             {
               root[axis] = row[axis] / this->RootVoxels[axis];
-              atEnd[axis] = row[axis] + 1 >= size[axis];
+              atEnd[axis] = row[axis] + 1 >= dims[axis];
             }
-            for (std::int64_t x = 0; x < size[0]; ++x)
+            root[last] += this->FirstLayer;
+            for (std::int64_t x = 0; x < dims[0]; ++x)
             {
               const MaterialIndex material = values[x];
-              bool boundary = x + 1 < size[0] && values[x + 1] != material;
+              bool boundary = x + 1 < dims[0] && values[x + 1] != material;
               for (int axis = 1; axis < Dim && !boundary; ++axis)
               {
                 boundary = !atEnd[axis] && values[x + strides[axis]] != material;
@@ -319,16 +340,20 @@ std::vector<std::int64_t> RootCellCosts(const MaterialImage<Dim>& image,
       }
     }
   };
-  for (int axis = 0; axis < Dim; ++axis)
-  {
-    if (rootVoxels[axis] < 1 || rootGridDimensions[axis] * rootVoxels[axis] < dims[axis])
-    {
-      return std::vector<std::int64_t>(costs.size(), 0); // not a cover of the image
-    }
-  }
-  Kernel kernel{ &image, rootVoxels, rootGridDimensions, costs.data() };
-  executor.For(0, rootGridDimensions[last], 1, kernel);
+  const std::int64_t countedRows = std::min(size[last], (endLayer - firstLayer) * rootVoxels[last]);
+  Kernel kernel{ &slab, rootVoxels, rootGridDimensions, firstLayer, countedRows, costs.data() };
+  // Layers are counted from the slab's first one inside the kernel.
+  executor.For(0, endLayer - firstLayer, 1, kernel);
   return costs;
+}
+
+template <int Dim, class Executor>
+std::vector<std::int64_t> RootCellCosts(const MaterialImage<Dim>& image,
+  const LatticeIndex<Dim>& rootVoxels, const LatticeIndex<Dim>& rootGridDimensions,
+  Executor& executor)
+{
+  return RootCellCostsOfLayers<Dim>(
+    image, 0, rootGridDimensions[Dim - 1], rootVoxels, rootGridDimensions, executor);
 }
 
 /// The root cells a piece is meshed from: `owned` grown by `ghostCells` on every side, its

@@ -251,6 +251,70 @@ TEST(RootCellCosts, OneVoxel3D)
   EXPECT_EQ(stm::RootCellCosts<3>(image, { 2, 2, 2 }, { 2, 2, 2 }, executor), expected);
 }
 
+TYPED_TEST(RootPiecesTest, SlabCostsAddUpToTheWholeImage)
+{
+  // Processes that each read a slab of root-cell layers along the last axis (and one row more)
+  // find the whole image's costs in the sum of their slabs' costs, for any number of slabs,
+  // also more than layers.
+  constexpr int D = TypeParam::value;
+  const stm::LatticeIndex<D> dims = FirstExtents<D>({ 13, 10, 11, 6 });
+  const stm::LatticeIndex<D> rootVoxels = FirstExtents<D>({ 3, 4, 2, 2 });
+  stm::LatticeIndex<D> rootDims;
+  for (int axis = 0; axis < D; ++axis)
+  {
+    rootDims[axis] = (dims[axis] + rootVoxels[axis] - 1) / rootVoxels[axis];
+  }
+  const LabelImage<D> image = MakeRandomImage<D>(dims, 7, 3, 6, 30);
+  stm::ThreadPoolExecutor executor(2);
+  const std::vector<std::int64_t> whole =
+    stm::RootCellCosts<D>(image.View(), rootVoxels, rootDims, executor);
+  ASSERT_GT(std::count_if(whole.begin(), whole.end(), [](std::int64_t c) { return c > 0; }), 2);
+  constexpr int last = D - 1;
+  const std::int64_t layers = rootDims[last];
+  const std::int64_t rowSize = stm::NumberOfLatticeCells<D>(dims) / dims[last];
+  bool missedWithoutNextRow = false;
+  for (std::int64_t slabs = 1; slabs <= layers + 1; ++slabs)
+  {
+    for (const bool withNextRow : { true, false })
+    {
+      SCOPED_TRACE(std::to_string(slabs) + " slabs" + (withNextRow ? "" : " without the next row"));
+      std::vector<std::int64_t> sum(whole.size(), 0);
+      for (std::int64_t slab = 0; slab < slabs; ++slab)
+      {
+        const std::int64_t first = slab * layers / slabs;
+        const std::int64_t end = (slab + 1) * layers / slabs;
+        const std::int64_t firstRow = std::min(dims[last], first * rootVoxels[last]);
+        const std::int64_t endRow =
+          std::min(dims[last], end * rootVoxels[last] + (withNextRow ? 1 : 0));
+        stm::MaterialImage<D> view = image.View();
+        view.Values += firstRow * rowSize;
+        view.Dimensions[last] = endRow - firstRow;
+        const std::vector<std::int64_t> costs =
+          stm::RootCellCostsOfLayers<D>(view, first, end, rootVoxels, rootDims, executor);
+        ASSERT_EQ(costs.size(), whole.size());
+        for (std::size_t i = 0; i < sum.size(); ++i)
+        {
+          sum[i] += costs[i];
+        }
+      }
+      if (withNextRow || slabs == 1)
+      {
+        EXPECT_EQ(sum, whole);
+      }
+      else
+      {
+        missedWithoutNextRow = missedWithoutNextRow || sum != whole;
+      }
+    }
+  }
+  // Without the next row the differences across a slab's last row go uncounted.
+  EXPECT_TRUE(missedWithoutNextRow);
+  // A slab that holds more than its layers and a row: no costs.
+  stm::MaterialImage<D> tooLong = image.View();
+  EXPECT_EQ(stm::RootCellCostsOfLayers<D>(tooLong, 0, 1, rootVoxels, rootDims, executor),
+    std::vector<std::int64_t>(whole.size(), 0));
+}
+
 TYPED_TEST(RootPiecesTest, GhostBoxesGrowByTwoAndStartEven)
 {
   constexpr int D = TypeParam::value;
