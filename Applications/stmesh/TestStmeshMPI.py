@@ -366,6 +366,28 @@ def case_cost_balance(c):
               "2 ranks own %s cells, not 31,196 and 77,818: not cut by cost" % c.rank_cells)
 
 
+def case_gray(c):
+    # --separating gray under MPI: each rank's separating function and snap read only the gray
+    # voxels around their piece's points (two passes, stmGrayImagePieces), the surface closed at
+    # the image's i = 0 face, and with the default pipeline P = 1, 2 and 4 give the same cells.
+    gray = T.write_gray_image(c, "gray.vti", DIMENSIONS, lambda i, j, k: 100.0 * (
+        1.0 - ((i - 10) / 30.0) ** 2 - ((j - 24) / 9.0) ** 2 - ((k - 20) / 8.0) ** 2))
+    image = write_image(c, "box.nii", lambda i, j, k: 1 if i < 40 and 8 <= j < 40 and
+                        6 <= k < 34 else 0)
+    extra = ["--separating", "gray:%s:50" % gray]
+    coordinates, cells, volumes1 = mesh_with_ranks(c, 1, "y1", extra, image)
+    reference = cell_set(coordinates, cells)
+    check(len(reference) > 10000, "only %d cells" % len(reference))
+    lowest = min(x for corners, material in reference if material != 0 for x, _, _ in corners)
+    check(lowest < 0.0, "the body's cells start at x = %g, not at the image's face" % lowest)
+    for ranks in (2, 4):
+        coordinates, cells, volumes = mesh_with_ranks(c, ranks, "y%d" % ranks, extra, image)
+        check(cell_set(coordinates, cells) == reference, "%d ranks: %d cells, 1 rank %d; not "
+              "the same cells" % (ranks, len(cells), len(reference)))
+        check(sorted(volumes) == sorted(volumes1), "materials %s, 1 rank %s" % (
+            sorted(volumes), sorted(volumes1)))
+
+
 def case_ranks_default(c):
     # The default pipeline (smoothing, volume restoration, quality improvement, small parts and
     # edge splits): the pieces exchange what every part of the smoothing needs, so P = 1, 2 and

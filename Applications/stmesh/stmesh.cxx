@@ -408,7 +408,8 @@ Arguments:
   --mpi                 start MPI even without a launcher that announces itself (Open MPI's,
                         MPICH's or a PMIx mpiexec are recognised; a .pvtu output starts MPI
                         too). With P > 1 ranks every rank reads only its extent of the image
-                        (a .nii.gz is inflated up to it), meshes its share of the root cells
+                        (a .nii.gz is inflated up to it), and of --separating gray's image the
+                        voxels around its piece's points, meshes its share of the root cells
                         with ghost root cells beyond it (two, more for root cells under 16
                         voxels) and drops the ghosts; the pieces are the one-rank mesh cell for
                         cell, the smoothing included: the ranks exchange the points they share
@@ -3910,6 +3911,9 @@ struct SeparatingSource
 {
   vtkSmartPointer<vtkSphere> Sphere;
   vtkSmartPointer<vtkImageData> Gray;
+  /// Under MPI the gray image's reader instead, of which the stages ask for the voxels around
+  /// their piece's points.
+  vtkSmartPointer<vtkAlgorithm> GrayReader;
 };
 
 /// stmSeparatingFunction for --separating gray and sphere (the gray image is read here); the
@@ -3936,12 +3940,22 @@ vtkSmartPointer<vtkUnstructuredGrid> ApplySeparatingFunction(
   {
     ImageInfo grayInfo;
     StageReport grayReport;
-    source.Gray = ReadImage(separating.GrayImage, grayInfo, grayReport, false);
+    if (CurrentPiece.Pieces > 1)
+    {
+      source.GrayReader =
+        stmesh::OpenImage(separating.GrayImage, ImageRole::Gray, grayInfo, grayReport.Seconds)
+          .Reader;
+      function->SetInputConnection(1, source.GrayReader->GetOutputPort());
+    }
+    else
+    {
+      source.Gray = ReadImage(separating.GrayImage, grayInfo, grayReport, false);
+      function->SetInputDataObject(1, source.Gray);
+    }
     report.Seconds += grayReport.Seconds;
     function->SetMode(stmSeparatingFunction::GRAY_IMAGE);
     function->SetThreshold(separating.GrayIso);
     function->SetInsideAboveThreshold(true);
-    function->SetInputDataObject(1, source.Gray);
   }
   vtkSmartPointer<vtkUnstructuredGrid> withFunction = vtkUnstructuredGrid::SafeDownCast(
     RunFilter(function, grid, "computing the separating function", report));
@@ -3969,11 +3983,15 @@ vtkSmartPointer<vtkUnstructuredGrid> RunSnap(vtkSmartPointer<vtkUnstructuredGrid
     snap->SetProjection(stmVertexSnap::FUNCTION);
     snap->SetImplicitFunction(source.Sphere);
   }
-  else if (source.Gray)
+  else if (source.Gray || source.GrayReader)
   {
-    grayProducer->SetOutput(source.Gray);
+    if (source.Gray)
+    {
+      grayProducer->SetOutput(source.Gray);
+    }
     snap->SetProjection(stmVertexSnap::FUNCTION);
-    snap->SetGrayImageConnection(grayProducer->GetOutputPort());
+    snap->SetGrayImageConnection(
+      source.GrayReader ? source.GrayReader->GetOutputPort() : grayProducer->GetOutputPort());
     snap->SetThreshold(options.Separating.GrayIso);
     snap->SetInsideAboveThreshold(true); // as stmSeparatingFunction above
   }

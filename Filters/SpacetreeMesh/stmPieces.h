@@ -104,15 +104,6 @@ inline void RequestWholeImageOnFirstPiece(vtkInformation* requestInfo, vtkInform
   imageInfo->Set(Pipeline::UPDATE_EXTENT(), nothing, 6);
 }
 
-/// Asks a gray image that a stage samples at the mesh's points (SeparatingFunction,
-/// VertexSnap) for the whole image on every piece: with SplitIntoPieces every piece has points
-/// to sample, which the request cannot tell apart from a later piece of the default mode (that
-/// then reads the image without using it).
-inline void RequestWholeGrayImage(vtkInformation* imageInfo)
-{
-  RequestWholeImage(imageInfo);
-}
-
 /// Field array of a tree or mesh that is a piece of a larger image's (SplitIntoPieces).
 constexpr const char* PieceMarkerName = "SpacetreeMeshPiece";
 

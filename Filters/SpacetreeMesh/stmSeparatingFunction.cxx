@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "stmSeparatingFunction.h"
 
+#include "stmGrayImagePieces.h"
 #include "stmPieces.h"
 #include "stmSurfaceFunction.h"
 
@@ -26,6 +27,7 @@ vtkStandardNewMacro(stmSeparatingFunction);
 vtkCxxSetObjectMacro(stmSeparatingFunction, ImplicitFunction, vtkImplicitFunction);
 
 stmSeparatingFunction::stmSeparatingFunction()
+  : GrayPieces(new stmGrayImagePieces)
 {
   this->SetNumberOfInputPorts(2);
 }
@@ -73,9 +75,10 @@ int stmSeparatingFunction::FillInputPortInformation(int port, vtkInformation* in
 }
 
 int stmSeparatingFunction::ComputeInputUpdateExtent(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector*)
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  stmPieces::RequestWholeGrayImage(inputVector[1]->GetInformationObject(0));
+  this->GrayPieces->Request(
+    outputVector->GetInformationObject(0), inputVector[1]->GetInformationObject(0));
   return 1;
 }
 
@@ -83,11 +86,11 @@ namespace
 {
 /// f at every point from the gray image (stmSurfaceFunction: trilinear on the image's point
 /// grid, minus the threshold, negated for a bright inside).
-bool SampleGrayImage(vtkImageData* image, double threshold, bool insideAbove, vtkPoints* points,
-  double* f, std::string& error)
+bool SampleGrayImage(vtkImageData* image, const int* wholeExtent, double threshold,
+  bool insideAbove, vtkPoints* points, double* f, std::string& error)
 {
   stmSurfaceFunction function;
-  if (!function.SetGrayImage(image, threshold, insideAbove, error))
+  if (!function.SetGrayImage(image, wholeExtent, threshold, insideAbove, error))
   {
     return false;
   }
@@ -105,9 +108,10 @@ bool SampleGrayImage(vtkImageData* image, double threshold, bool insideAbove, vt
 }
 } // namespace
 
-int stmSeparatingFunction::RequestData(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+int stmSeparatingFunction::RequestData(vtkInformation* pipelineRequest,
+  vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  stmGrayImagePieces::Scope grayPass(this->GrayPieces.get(), pipelineRequest);
   vtkPointSet* input = vtkPointSet::GetData(inputVector[0], 0);
   vtkPointSet* output = vtkPointSet::GetData(outputVector, 0);
   vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
@@ -174,9 +178,18 @@ int stmSeparatingFunction::RequestData(
     {
       return fail("no gray image on input port 1 (Mode is Gray Image)");
     }
+    vtkInformation* grayInfo = inputVector[1]->GetInformationObject(0);
+    if (this->GrayPieces->IsFirstPass(
+          pipelineRequest, outputVector->GetInformationObject(0), grayInfo, image, input))
+    {
+      // The second pass samples the voxels around the piece's points.
+      output->Initialize();
+      grayPass.KeepGoing();
+      return 1;
+    }
     std::string error;
-    if (!SampleGrayImage(
-          image, this->Threshold, this->InsideAboveThreshold, input->GetPoints(), f, error))
+    if (!SampleGrayImage(image, stmGrayImagePieces::WholeExtent(grayInfo), this->Threshold,
+          this->InsideAboveThreshold, input->GetPoints(), f, error))
     {
       return fail(error);
     }

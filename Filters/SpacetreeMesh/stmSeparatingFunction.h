@@ -13,8 +13,12 @@
  * - GRAY_IMAGE: the gray values of the image on input port 1 (its active point scalars, first
  *   component), interpolated trilinearly at each point in the image's physical space (origin,
  *   spacing and direction), minus Threshold, negated when InsideAboveThreshold (a bright body:
- *   brain, bone). Points outside the image get the most "outside" value of the image. NaN gray
- *   values stay NaN, which stmMarchingSimplices refuses.
+ *   brain, bone). The image is closed at its boundary: beyond it a point gets the magnitude of
+ *   the value at the nearest voxel, so where the inside reaches the boundary its surface lies
+ *   on it. NaN gray values stay NaN, which stmMarchingSimplices refuses. Asked for one of
+ *   several pieces (under MPI), the filter reads only the voxels around the piece's points,
+ *   in two passes (the first finds the piece's bounds), and gives the values of the whole
+ *   image.
  * The input passes through otherwise unchanged.
  *
  * @sa stmMarchingSimplices stmSpacetreeTessellate
@@ -26,6 +30,9 @@
 #include "SpacetreeMeshFiltersModule.h" // for export macro
 #include "vtkPointSetAlgorithm.h"
 
+#include <memory> // for std::unique_ptr
+
+class stmGrayImagePieces;
 class vtkImplicitFunction;
 
 class SPACETREEMESHFILTERS_EXPORT stmSeparatingFunction : public vtkPointSetAlgorithm
@@ -89,7 +96,8 @@ protected:
   ~stmSeparatingFunction() override;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
-  /// Under MPI: the whole gray image on every piece (stmPieces::RequestWholeGrayImage).
+  /// The whole gray image for one piece; for one of several, the voxels around the piece's
+  /// points (stmGrayImagePieces).
   int ComputeInputUpdateExtent(vtkInformation* request, vtkInformationVector** inputVector,
     vtkInformationVector* outputVector) override;
   int RequestData(vtkInformation* request, vtkInformationVector** inputVector,
@@ -103,6 +111,7 @@ private:
   vtkImplicitFunction* ImplicitFunction = nullptr;
   double Threshold = 0.0;
   bool InsideAboveThreshold = true;
+  std::unique_ptr<stmGrayImagePieces> GrayPieces;
 };
 
 #endif

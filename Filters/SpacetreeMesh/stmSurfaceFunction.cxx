@@ -18,8 +18,8 @@ void stmSurfaceFunction::SetImplicitFunction(vtkImplicitFunction* function)
   this->Gray.clear();
 }
 
-bool stmSurfaceFunction::SetGrayImage(
-  vtkImageData* image, double threshold, bool insideAboveThreshold, std::string& error)
+bool stmSurfaceFunction::SetGrayImage(vtkImageData* image, const int* wholeExtent, double threshold,
+  bool insideAboveThreshold, std::string& error)
 {
   this->Implicit = nullptr;
   vtkDataArray* scalars = image->GetPointData()->GetScalars();
@@ -28,10 +28,29 @@ bool stmSurfaceFunction::SetGrayImage(
     error = "the gray image has no point scalars";
     return false;
   }
-  image->GetDimensions(this->Dimensions);
-  if (static_cast<vtkIdType>(this->Dimensions[0]) * this->Dimensions[1] * this->Dimensions[2] == 0)
+  int extent[6];
+  image->GetExtent(extent);
+  const int* whole = wholeExtent ? wholeExtent : extent;
+  for (int axis = 0; axis < 3; ++axis)
   {
-    error = "the gray image is empty";
+    this->Dimensions[axis] = whole[2 * axis + 1] - whole[2 * axis] + 1;
+    this->ExtentStart[axis] = whole[2 * axis];
+    if (extent[2 * axis] > extent[2 * axis + 1])
+    {
+      error = "the gray image is empty";
+      return false;
+    }
+    if (extent[2 * axis] < whole[2 * axis] || extent[2 * axis + 1] > whole[2 * axis + 1])
+    {
+      error = "the gray image's extent is not within its whole extent";
+      return false;
+    }
+  }
+  if (scalars->GetNumberOfTuples() !=
+    static_cast<vtkIdType>(extent[1] - extent[0] + 1) * (extent[3] - extent[2] + 1) *
+      (extent[5] - extent[4] + 1))
+  {
+    error = "the gray image's scalars do not match its extent";
     return false;
   }
   // f is computed in place, so a double array the image owns is copied once, anything else
@@ -53,26 +72,17 @@ bool stmSurfaceFunction::SetGrayImage(
     }
   }
   const double sign = insideAboveThreshold ? -1.0 : 1.0;
-  double outside = 1.0;
   for (double& value : this->Gray)
   {
     value = sign * (value - threshold);
-    if (std::isfinite(value))
-    {
-      outside = std::max(outside, value);
-    }
   }
-  this->Field =
-    stm::VoxelField<3, double>{ { this->Dimensions[0], this->Dimensions[1], this->Dimensions[2] },
-      this->Gray.data(), outside };
-  // The physical-to-index matrix gives the index in the whole image; the samples start at the
-  // extent's first index.
-  int extent[6];
-  image->GetExtent(extent);
-  for (int axis = 0; axis < 3; ++axis)
-  {
-    this->ExtentStart[axis] = extent[2 * axis];
-  }
+  this->Field.Dimensions = { this->Dimensions[0], this->Dimensions[1], this->Dimensions[2] };
+  this->Field.BoxFirst = { extent[0] - whole[0], extent[2] - whole[2], extent[4] - whole[4] };
+  this->Field.BoxDimensions = { extent[1] - extent[0] + 1, extent[3] - extent[2] + 1,
+    extent[5] - extent[4] + 1 };
+  this->Field.Values = this->Gray.data();
+  // The physical-to-index matrix gives the index in the whole image, whose samples start at the
+  // whole extent's first index.
   vtkMatrix4x4* matrix = image->GetPhysicalToIndexMatrix();
   for (int r = 0; r < 3; ++r)
   {

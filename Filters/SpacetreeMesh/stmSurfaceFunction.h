@@ -8,7 +8,11 @@
  * onto its zero set along the gradient. The gray image convention is the one of
  * stmSeparatingFunction: f = gray - threshold, negated when the inside is above the threshold,
  * the gray values (voxel values at the image points) interpolated trilinearly in the image's
- * physical space, a point beyond the image getting the most "outside" value.
+ * physical space. The image is closed at its boundary (stm::ClosedVoxelField): beyond it f is
+ * the magnitude of the nearest voxel's, so the surface of an inside that reaches the boundary
+ * lies on it. The image may be a sub-extent of a larger one (a piece's read): every value then
+ * is the whole image's wherever the sub-extent holds the voxels within one voxel (NaN where it
+ * does not).
  *
  * Evaluation is thread-safe: the gray image is read only, and the implicit function (not
  * documented as thread-safe in VTK) is evaluated under a lock.
@@ -34,10 +38,11 @@ public:
   /// Uses an implicit function, evaluated in physical coordinates.
   void SetImplicitFunction(vtkImplicitFunction* function);
 
-  /// Uses the gray image's active point scalars (first component). False with `error` set for
-  /// an image without scalars or without voxels.
-  bool SetGrayImage(
-    vtkImageData* image, double threshold, bool insideAboveThreshold, std::string& error);
+  /// Uses the gray image's active point scalars (first component); `wholeExtent` is the extent
+  /// of the image it is a part of (null: the image is whole). False with `error` set for an
+  /// image without scalars or without voxels.
+  bool SetGrayImage(vtkImageData* image, const int* wholeExtent, double threshold,
+    bool insideAboveThreshold, std::string& error);
 
   /// f at a physical point.
   double Evaluate(const double x[3]) const;
@@ -53,9 +58,9 @@ private:
   vtkSmartPointer<vtkImplicitFunction> Implicit;
   mutable std::mutex ImplicitLock;
   std::vector<double> Gray; // signed: f at the voxels
-  stm::VoxelField<3, double> Field;
-  int Dimensions[3] = { 0, 0, 0 };
-  int ExtentStart[3] = { 0, 0, 0 }; // the image's first index per axis (a sub-extent)
+  stm::ClosedVoxelField<3, double> Field;
+  int Dimensions[3] = { 0, 0, 0 };  // the whole image's
+  int ExtentStart[3] = { 0, 0, 0 }; // the whole image's first index per axis
   double PhysicalToIndex[3][4] = {};
 };
 

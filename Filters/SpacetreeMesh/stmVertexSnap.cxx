@@ -3,6 +3,7 @@
 
 #include "stmCutInput.h"
 #include "stmFunctionValues.h"
+#include "stmGrayImagePieces.h"
 #include "stmPieces.h"
 #include "stmPlaneFrame.h"
 #include "stmSMPExecutor.h"
@@ -132,6 +133,7 @@ stm::Status Snap(SnapRequest& request, const IdType* connectivity, std::string& 
 } // namespace
 
 stmVertexSnap::stmVertexSnap()
+  : GrayPieces(new stmGrayImagePieces)
 {
   this->SetNumberOfInputPorts(2);
   this->SetInputArrayToProcess(
@@ -192,15 +194,17 @@ int stmVertexSnap::RequestUpdateExtent(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   const int result = this->Superclass::RequestUpdateExtent(request, inputVector, outputVector);
-  stmPieces::RequestWholeGrayImage(inputVector[1]->GetInformationObject(0));
+  this->GrayPieces->Request(
+    outputVector->GetInformationObject(0), inputVector[1]->GetInformationObject(0));
   return result;
 }
 
-int stmVertexSnap::RequestData(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+int stmVertexSnap::RequestData(vtkInformation* pipelineRequest, vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector)
 {
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0], 0);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
+  stmGrayImagePieces::Scope grayPass(this->GrayPieces.get(), pipelineRequest);
   this->NumberOfSnappedPoints = 0;
   this->NumberOfRefusedSnaps = 0;
   this->NumberOfAdjustedPoints = 0;
@@ -236,6 +240,7 @@ int stmVertexSnap::RequestData(
   if (project)
   {
     vtkImageData* image = vtkImageData::GetData(inputVector[1], 0);
+    vtkInformation* grayInfo = inputVector[1]->GetInformationObject(0);
     if (this->ImplicitFunction)
     {
       surface.SetImplicitFunction(this->ImplicitFunction);
@@ -245,7 +250,14 @@ int stmVertexSnap::RequestData(
       return fail("Projection is Function, but there is neither an implicit function nor a gray "
                   "image on input port 1");
     }
-    else if (!surface.SetGrayImage(image, this->Threshold, this->InsideAboveThreshold, error))
+    else if (this->GrayPieces->IsFirstPass(
+               pipelineRequest, outputVector->GetInformationObject(0), grayInfo, image, input))
+    {
+      grayPass.KeepGoing();
+      return 1; // the second pass samples the voxels around the piece's points
+    }
+    else if (!surface.SetGrayImage(image, stmGrayImagePieces::WholeExtent(grayInfo),
+               this->Threshold, this->InsideAboveThreshold, error))
     {
       return fail(error);
     }

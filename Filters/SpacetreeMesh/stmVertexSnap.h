@@ -51,6 +51,9 @@
 #include "SpacetreeMeshFiltersModule.h" // for export macro
 #include "vtkUnstructuredGridAlgorithm.h"
 
+#include <memory> // for std::unique_ptr
+
+class stmGrayImagePieces;
 class vtkImplicitFunction;
 
 class SPACETREEMESHFILTERS_EXPORT stmVertexSnap : public vtkUnstructuredGridAlgorithm
@@ -184,7 +187,8 @@ protected:
   ~stmVertexSnap() override;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
-  /// Under MPI: the whole gray image on every piece (stmPieces::RequestWholeGrayImage).
+  /// The whole gray image for one piece; for one of several, the voxels around the piece's
+  /// points (stmGrayImagePieces).
   int RequestUpdateExtent(vtkInformation* request, vtkInformationVector** inputVector,
     vtkInformationVector* outputVector) override;
   int RequestData(vtkInformation* request, vtkInformationVector** inputVector,
@@ -206,6 +210,7 @@ private:
   vtkIdType NumberOfSnappedPoints = 0;
   vtkIdType NumberOfRefusedSnaps = 0;
   vtkIdType NumberOfAdjustedPoints = 0;
+  std::unique_ptr<stmGrayImagePieces> GrayPieces;
 };
 
 #endif

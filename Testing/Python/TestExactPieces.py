@@ -21,13 +21,8 @@ import stmtesting as T
 from vtkmodules.vtkCommonDataModel import vtkDataObject
 from vtkmodules.vtkCommonExecutionModel import vtkTrivialProducer
 from vtkmodules.vtkFiltersGeneral import vtkPassArrays
-from vtkmodules.vtkParallelCore import vtkMultiProcessController
 
-controller = vtkMultiProcessController.GetGlobalController()
-rank, ranks = controller.GetLocalProcessId(), controller.GetNumberOfProcesses()
-T.check(ranks > 1, "run under mpiexec with several ranks, not %d" % ranks)
-T.exit_all_ranks_on_failure(ranks)
-temp = os.environ.get("STM_TEMP_DIR", ".")
+controller, rank, ranks, temp = T.mpi_pieces_run()
 
 
 def chain(image, cut, targets="field"):

@@ -250,7 +250,7 @@ check_pieces(three_d, 2, False, 1, "cut surface", "3D cut surface (triangles)")
 # are still the serial mesh.
 check_pieces(ellipsoids((20, 20, 20)), 3, False, 1, True, "8 root cells", piece_counts=(10,))
 # A gray image (0.9 in the body, 0.1 outside) as the separating function, sampled at every
-# piece's points: each piece reads the whole gray image.
+# piece's points (each piece asks for the voxels around its points; the producer holds them all).
 gray = T.make_image(np.where(three_d > 0, 1.0, 0.0).astype(np.float32) * 0.8 + 0.1, name="gray")
 check_pieces(three_d, 3, False, 1, True, "3D gray image to MarchingSimplices", gray=gray)
 two_d = ellipsoids((1, 83, 97))

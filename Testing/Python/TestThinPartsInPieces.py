@@ -15,14 +15,8 @@ import numpy as np
 import spacetreemesh
 import stmtesting as T
 from vtkmodules.vtkIOXML import vtkXMLImageDataReader, vtkXMLImageDataWriter
-from vtkmodules.vtkParallelCore import vtkMultiProcessController
 
-controller = vtkMultiProcessController.GetGlobalController()
-rank, ranks = controller.GetLocalProcessId(), controller.GetNumberOfProcesses()
-T.check(ranks > 1, "run under mpiexec with several ranks, not %d" % ranks)
-T.exit_all_ranks_on_failure(ranks)
-temp = os.environ.get("STM_TEMP_DIR", ".")
-os.makedirs(temp, exist_ok=True)
+controller, rank, ranks, temp = T.mpi_pieces_run()
 
 labels = T.nested_ellipsoids((32, 28, 128))  # [z, y, x]
 labels[2:8, 2:8, 1:7] = 5

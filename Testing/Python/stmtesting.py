@@ -49,6 +49,21 @@ def exit_all_ranks_on_failure(ranks):
     sys.excepthook = print_and_exit
 
 
+def mpi_pieces_run():
+    """A test under `mpiexec -n P pvbatch --symmetric` with P > 1, every rank asking for its own
+    piece: (controller, rank, ranks, temp), a failed check ending every rank
+    (exit_all_ranks_on_failure), temp the folder STM_TEMP_DIR names (made), else ".". """
+    from vtkmodules.vtkParallelCore import vtkMultiProcessController
+
+    controller = vtkMultiProcessController.GetGlobalController()
+    rank, ranks = controller.GetLocalProcessId(), controller.GetNumberOfProcesses()
+    check(ranks > 1, "run under mpiexec with several ranks, not %d" % ranks)
+    exit_all_ranks_on_failure(ranks)
+    temp = os.environ.get("STM_TEMP_DIR", ".")
+    os.makedirs(temp, exist_ok=True)
+    return controller, rank, ranks, temp
+
+
 def check(condition, message):
     """Like assert, but survives python -O and always carries a message."""
     if not condition:

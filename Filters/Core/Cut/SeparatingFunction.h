@@ -20,6 +20,96 @@
 namespace stm
 {
 
+namespace detail
+{
+/// The dual cell a point in voxel units lies in: its lowest voxel, and the point's place in it
+/// per axis (0 to 1).
+template <int Dim>
+LatticeIndex<Dim> DualCell(const double* position, double* weights)
+{
+  LatticeIndex<Dim> lower;
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    const double dual = position[axis] - 0.5;
+    const double floor = std::floor(dual);
+    lower[axis] = static_cast<std::int64_t>(floor);
+    weights[axis] = dual - floor;
+  }
+  return lower;
+}
+
+/// d-linear interpolation on the dual grid of any field with At(voxel), at a point in voxel
+/// units (0: the outer corner of the first voxel; voxel i is centred at i + 1/2).
+template <int Dim, class Field>
+double SampleDual(const Field& field, const double* position)
+{
+  double weights[Dim];
+  const LatticeIndex<Dim> lower = DualCell<Dim>(position, weights);
+  double sum = 0.0;
+  for (unsigned corner = 0; corner < (1u << Dim); ++corner)
+  {
+    double weight = 1.0;
+    LatticeIndex<Dim> voxel = lower;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      const bool upper = (corner >> axis) & 1u;
+      voxel[axis] += upper ? 1 : 0;
+      weight *= upper ? weights[axis] : 1.0 - weights[axis];
+    }
+    if (weight != 0.0)
+    {
+      sum += weight * field.At(voxel);
+    }
+  }
+  return sum;
+}
+
+/// SampleDual and its gradient (per voxel unit along each axis); on a dual cell's face the
+/// derivative across it is the upper cell's.
+template <int Dim, class Field>
+double SampleDualWithGradient(const Field& field, const double* position, double* gradient)
+{
+  double weights[Dim];
+  const LatticeIndex<Dim> lower = DualCell<Dim>(position, weights);
+  for (int axis = 0; axis < Dim; ++axis)
+  {
+    gradient[axis] = 0.0;
+  }
+  double sum = 0.0;
+  for (unsigned corner = 0; corner < (1u << Dim); ++corner)
+  {
+    LatticeIndex<Dim> voxel = lower;
+    double factors[Dim];
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      const bool upper = (corner >> axis) & 1u;
+      voxel[axis] += upper ? 1 : 0;
+      factors[axis] = upper ? weights[axis] : 1.0 - weights[axis];
+    }
+    const double value = field.At(voxel);
+    double weight = 1.0;
+    for (int axis = 0; axis < Dim; ++axis)
+    {
+      weight *= factors[axis];
+      double others = (corner >> axis) & 1u ? 1.0 : -1.0;
+      for (int other = 0; other < Dim; ++other)
+      {
+        others *= other == axis ? 1.0 : factors[other];
+      }
+      if (others != 0.0)
+      {
+        gradient[axis] += others * value;
+      }
+    }
+    if (weight != 0.0)
+    {
+      sum += weight * value;
+    }
+  }
+  return sum;
+}
+} // namespace detail
+
 /// Values at the voxel centres of an image (axis 0 fastest).
 template <int Dim, class Value>
 struct VoxelField
@@ -45,82 +135,63 @@ struct VoxelField
 
   /// d-linear interpolation on the dual grid at a point in voxel units (0: the outer corner of
   /// the first voxel; voxel i is centred at i + 1/2).
-  double Sample(const double* position) const
-  {
-    LatticeIndex<Dim> lower;
-    double weights[Dim];
-    for (int axis = 0; axis < Dim; ++axis)
-    {
-      const double dual = position[axis] - 0.5;
-      const double floor = std::floor(dual);
-      lower[axis] = static_cast<std::int64_t>(floor);
-      weights[axis] = dual - floor;
-    }
-    double sum = 0.0;
-    for (unsigned corner = 0; corner < (1u << Dim); ++corner)
-    {
-      double weight = 1.0;
-      LatticeIndex<Dim> voxel = lower;
-      for (int axis = 0; axis < Dim; ++axis)
-      {
-        const bool upper = (corner >> axis) & 1u;
-        voxel[axis] += upper ? 1 : 0;
-        weight *= upper ? weights[axis] : 1.0 - weights[axis];
-      }
-      if (weight != 0.0)
-      {
-        sum += weight * this->At(voxel);
-      }
-    }
-    return sum;
-  }
+  double Sample(const double* position) const { return detail::SampleDual<Dim>(*this, position); }
 
   /// Sample and its gradient (per voxel unit along each axis); on a dual cell's face the
   /// derivative across it is the upper cell's. Vertex snapping projects along it.
   double SampleWithGradient(const double* position, double* gradient) const
   {
-    LatticeIndex<Dim> lower;
-    double weights[Dim];
-    for (int axis = 0; axis < Dim; ++axis)
+    return detail::SampleDualWithGradient<Dim>(*this, position, gradient);
+  }
+};
+
+/// Values at the voxel centres of a box of an image (a sub-extent, as a piece reads it), with
+/// the image closed at its boundary: a voxel beyond the image takes the magnitude of the nearest
+/// voxel of the image, at least Floor (> 0). So a field that is negative inside (a gray image
+/// against a threshold) has its zero set on the image's boundary wherever the inside reaches it,
+/// as the body indicator has, and every value depends only on voxels within one voxel of where
+/// it is sampled: a box that holds the voxels within one voxel of every sampled point gives the
+/// whole image's values. A voxel of the image outside the box is NaN (the box is too small).
+template <int Dim, class Value>
+struct ClosedVoxelField
+{
+  /// The whole image's dimensions.
+  LatticeIndex<Dim> Dimensions{};
+  /// The box held: Values covers [BoxFirst, BoxFirst + BoxDimensions) (axis 0 fastest).
+  LatticeIndex<Dim> BoxFirst{};
+  LatticeIndex<Dim> BoxDimensions{};
+  const Value* Values = nullptr;
+  double Floor = 1e-300;
+
+  double At(const LatticeIndex<Dim>& voxel) const
+  {
+    bool beyond = false;
+    std::int64_t index = 0;
+    for (int axis = Dim - 1; axis >= 0; --axis)
     {
-      const double dual = position[axis] - 0.5;
-      const double floor = std::floor(dual);
-      lower[axis] = static_cast<std::int64_t>(floor);
-      weights[axis] = dual - floor;
-      gradient[axis] = 0.0;
+      std::int64_t nearest = voxel[axis];
+      if (nearest < 0 || nearest >= this->Dimensions[axis])
+      {
+        beyond = true;
+        nearest =
+          std::min<std::int64_t>(std::max<std::int64_t>(nearest, 0), this->Dimensions[axis] - 1);
+      }
+      const std::int64_t inBox = nearest - this->BoxFirst[axis];
+      if (inBox < 0 || inBox >= this->BoxDimensions[axis])
+      {
+        return std::nan("");
+      }
+      index = index * this->BoxDimensions[axis] + inBox;
     }
-    double sum = 0.0;
-    for (unsigned corner = 0; corner < (1u << Dim); ++corner)
-    {
-      LatticeIndex<Dim> voxel = lower;
-      double factors[Dim];
-      for (int axis = 0; axis < Dim; ++axis)
-      {
-        const bool upper = (corner >> axis) & 1u;
-        voxel[axis] += upper ? 1 : 0;
-        factors[axis] = upper ? weights[axis] : 1.0 - weights[axis];
-      }
-      const double value = this->At(voxel);
-      double weight = 1.0;
-      for (int axis = 0; axis < Dim; ++axis)
-      {
-        weight *= factors[axis];
-        double others = (corner >> axis) & 1u ? 1.0 : -1.0;
-        for (int other = 0; other < Dim; ++other)
-        {
-          others *= other == axis ? 1.0 : factors[other];
-        }
-        if (others != 0.0)
-        {
-          gradient[axis] += others * value;
-        }
-      }
-      if (weight != 0.0)
-      {
-        sum += weight * value;
-      }
-    }
-    return sum;
+    const double value = static_cast<double>(this->Values[index]);
+    return beyond ? std::max(this->Floor, std::abs(value)) : value;
+  }
+
+  double Sample(const double* position) const { return detail::SampleDual<Dim>(*this, position); }
+
+  double SampleWithGradient(const double* position, double* gradient) const
+  {
+    return detail::SampleDualWithGradient<Dim>(*this, position, gradient);
   }
 };
 

@@ -727,4 +727,150 @@ TEST(VertexSnap, DualGridGradientMatchesDifferences)
   }
 }
 
+// A gray image's field closed at the image's boundary (stm::ClosedVoxelField): beyond the
+// image the nearest voxel's magnitude, so an inside voxel at the boundary puts the zero set on
+// it; and a box that holds the voxels within one voxel of every sampled point gives the whole
+// image's values bit for bit (a piece's sub-extent read), NaN where it does not.
+template <int D>
+void CheckClosedVoxelField()
+{
+  std::mt19937 random(7 + D);
+  stm::LatticeIndex<D> dimensions;
+  std::int64_t count = 1;
+  for (int axis = 0; axis < D; ++axis)
+  {
+    dimensions[axis] = 4 + axis;
+    count *= dimensions[axis];
+  }
+  std::uniform_real_distribution<double> value(-3.0, 3.0);
+  std::vector<double> voxels(static_cast<std::size_t>(count));
+  for (double& v : voxels)
+  {
+    v = value(random);
+  }
+  const auto flat = [&](const stm::LatticeIndex<D>& voxel)
+  {
+    std::int64_t index = 0;
+    for (int axis = D - 1; axis >= 0; --axis)
+    {
+      index = index * dimensions[axis] + voxel[axis];
+    }
+    return index;
+  };
+  stm::ClosedVoxelField<D, double> whole;
+  whole.Dimensions = dimensions;
+  whole.BoxDimensions = dimensions;
+  whole.Values = voxels.data();
+  // Beyond the image: the nearest voxel's magnitude.
+  std::uniform_int_distribution<int> offset(-3, 3);
+  for (int trial = 0; trial < 300; ++trial)
+  {
+    stm::LatticeIndex<D> voxel, nearest;
+    bool beyond = false;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      voxel[axis] = offset(random) + (trial % 2 ? dimensions[axis] - 1 : 0);
+      nearest[axis] =
+        std::min<std::int64_t>(std::max<std::int64_t>(voxel[axis], 0), dimensions[axis] - 1);
+      beyond = beyond || nearest[axis] != voxel[axis];
+    }
+    const double expected = voxels[static_cast<std::size_t>(flat(nearest))];
+    EXPECT_EQ(whole.At(voxel), beyond ? std::abs(expected) : expected);
+  }
+  // An inside voxel at the boundary: f = 0 on the boundary facet's centre.
+  stm::LatticeIndex<D> first{};
+  voxels[static_cast<std::size_t>(flat(first))] = -2.5;
+  double facet[D];
+  for (int axis = 0; axis < D; ++axis)
+  {
+    facet[axis] = 0.5;
+  }
+  facet[0] = 0.0;
+  EXPECT_EQ(whole.Sample(facet), 0.0);
+  // A box of the image: the whole image's values wherever the box holds the voxels within one
+  // voxel of the point (clamped into the image), NaN where it misses one.
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 50; ++trial)
+  {
+    stm::ClosedVoxelField<D, double> box;
+    box.Dimensions = dimensions;
+    std::int64_t boxCount = 1;
+    for (int axis = 0; axis < D; ++axis)
+    {
+      std::uniform_int_distribution<std::int64_t> start(0, dimensions[axis] - 2);
+      box.BoxFirst[axis] = start(random);
+      std::uniform_int_distribution<std::int64_t> size(2, dimensions[axis] - box.BoxFirst[axis]);
+      box.BoxDimensions[axis] = size(random);
+      boxCount *= box.BoxDimensions[axis];
+    }
+    std::vector<double> held;
+    ForEachIndex<D>(box.BoxDimensions,
+      [&](const stm::LatticeIndex<D>& local)
+      {
+        stm::LatticeIndex<D> voxel;
+        for (int axis = 0; axis < D; ++axis)
+        {
+          voxel[axis] = local[axis] + box.BoxFirst[axis];
+        }
+        held.push_back(voxels[static_cast<std::size_t>(flat(voxel))]);
+      });
+    ASSERT_EQ(static_cast<std::int64_t>(held.size()), boxCount);
+    box.Values = held.data();
+    int inside = 0;
+    int missed = 0;
+    for (int sample = 0; sample < 100; ++sample)
+    {
+      double position[D];
+      bool covered = true;
+      for (int axis = 0; axis < D; ++axis)
+      {
+        // Voxel units, from 1.5 voxels before the image to 1.5 beyond it.
+        position[axis] = -1.5 + unit(random) * (static_cast<double>(dimensions[axis]) + 3.0);
+        const auto lower = static_cast<std::int64_t>(std::floor(position[axis] - 0.5));
+        for (std::int64_t v = lower; v <= lower + 1; ++v)
+        {
+          const std::int64_t nearest =
+            std::min<std::int64_t>(std::max<std::int64_t>(v, 0), dimensions[axis] - 1);
+          covered = covered && nearest >= box.BoxFirst[axis] &&
+            nearest < box.BoxFirst[axis] + box.BoxDimensions[axis];
+        }
+      }
+      double gradient[D], boxGradient[D];
+      const double expected = whole.SampleWithGradient(position, gradient);
+      const double got = box.SampleWithGradient(position, boxGradient);
+      if (covered)
+      {
+        ++inside;
+        EXPECT_EQ(got, expected);
+        EXPECT_EQ(box.Sample(position), whole.Sample(position));
+        for (int axis = 0; axis < D; ++axis)
+        {
+          EXPECT_EQ(boxGradient[axis], gradient[axis]);
+        }
+      }
+      else
+      {
+        ++missed;
+        EXPECT_TRUE(std::isnan(got));
+      }
+    }
+    EXPECT_GT(inside + missed, 0);
+  }
+}
+
+TEST(VertexSnap, ClosedVoxelField2D)
+{
+  CheckClosedVoxelField<2>();
+}
+
+TEST(VertexSnap, ClosedVoxelField3D)
+{
+  CheckClosedVoxelField<3>();
+}
+
+TEST(VertexSnap, ClosedVoxelField4D)
+{
+  CheckClosedVoxelField<4>();
+}
+
 } // namespace
