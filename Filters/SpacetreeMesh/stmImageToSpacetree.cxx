@@ -136,6 +136,31 @@ struct MapToMaterials
   }
 };
 
+/// The distinct labels of an integer label array (CollectLabels), by the integer types' fast
+/// path or the generic vtkDataArray one.
+CollectLabels LabelsOf(vtkDataArray* labels)
+{
+  CollectLabels collect;
+  if (!vtkArrayDispatch::DispatchByValueType<vtkArrayDispatch::Integrals>::Execute(labels, collect))
+  {
+    collect(labels);
+  }
+  return collect;
+}
+
+/// Every voxel's material for the sorted body labels (MapToMaterials), by the same two paths.
+std::vector<stm::MaterialIndex> MaterialsOf(
+  vtkDataArray* labels, const std::vector<long long>& sortedBody)
+{
+  std::vector<stm::MaterialIndex> materials(static_cast<std::size_t>(labels->GetNumberOfTuples()));
+  MapToMaterials map{ &sortedBody, &materials };
+  if (!vtkArrayDispatch::DispatchByValueType<vtkArrayDispatch::Integrals>::Execute(labels, map))
+  {
+    map(labels);
+  }
+  return materials;
+}
+
 /// Everything the tree construction needs besides the material image.
 struct RefinementRequest
 {
@@ -1251,13 +1276,7 @@ int stmImageToSpacetree::SumRootCellCostsOverSlabs(vtkInformation* request,
     std::vector<long long> body(this->BodyLabels.begin(), this->BodyLabels.end());
     if (body.empty())
     {
-      CollectLabels collect;
-      if (!vtkArrayDispatch::DispatchByValueType<vtkArrayDispatch::Integrals>::Execute(
-            labels, collect))
-      {
-        collect(labels);
-      }
-      for (long long label : collect.Labels)
+      for (long long label : LabelsOf(labels).Labels)
       {
         if (label != this->BackgroundLabel)
         {
@@ -1270,12 +1289,7 @@ int stmImageToSpacetree::SumRootCellCostsOverSlabs(vtkInformation* request,
     const vtkIdType voxels = static_cast<vtkIdType>(voxelDims[0]) * voxelDims[1] * voxelDims[2];
     if (!body.empty() && body.size() <= 65535 && labels->GetNumberOfTuples() == voxels)
     {
-      std::vector<stm::MaterialIndex> materials(static_cast<std::size_t>(voxels));
-      MapToMaterials map{ &body, &materials };
-      if (!vtkArrayDispatch::DispatchByValueType<vtkArrayDispatch::Integrals>::Execute(labels, map))
-      {
-        map(labels);
-      }
+      const std::vector<stm::MaterialIndex> materials = MaterialsOf(labels, body);
       long long firstLayer = 0;
       long long endLayer = 0;
       int slabExtent[6];
@@ -1511,11 +1525,7 @@ int stmImageToSpacetree::RequestData(vtkInformation* pipelineRequest,
   this->UpdateProgress(0.05);
 
   // The body of interest.
-  CollectLabels collect;
-  if (!vtkArrayDispatch::DispatchByValueType<vtkArrayDispatch::Integrals>::Execute(labels, collect))
-  {
-    collect(labels); // generic fallback through the vtkDataArray API
-  }
+  const CollectLabels collect = LabelsOf(labels);
   if (collect.OutOfRange)
   {
     vtkErrorMacro("The label array holds values outside the 32-bit integer range.");
@@ -1590,12 +1600,7 @@ int stmImageToSpacetree::RequestData(vtkInformation* pipelineRequest,
       "The body of interest has " << body.size() << " labels; at most 65535 are supported.");
     return 0;
   }
-  std::vector<stm::MaterialIndex> materials(static_cast<std::size_t>(labels->GetNumberOfTuples()));
-  MapToMaterials map{ &body, &materials };
-  if (!vtkArrayDispatch::DispatchByValueType<vtkArrayDispatch::Integrals>::Execute(labels, map))
-  {
-    map(labels);
-  }
+  std::vector<stm::MaterialIndex> materials = MaterialsOf(labels, body);
   std::vector<long long> materialLabels{ this->BackgroundLabel };
   materialLabels.insert(materialLabels.end(), body.begin(), body.end());
   this->UpdateProgress(0.2);
