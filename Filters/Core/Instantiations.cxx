@@ -77,7 +77,8 @@ void InstantiatePipeline()
     VertexSnapOptions(), executor);
   snap.Snap(
     static_cast<double*>(nullptr), nullptr, 0, static_cast<const std::int32_t*>(nullptr), 0,
-    VertexSnapOptions(), [](std::int64_t, const double*, const double*, double*) { return true; },
+    VertexSnapOptions(),
+    [](std::int64_t, const double*, const double*, const double*, double*) { return true; },
     executor);
   BoundarySmoother<Dim>().Smooth(static_cast<double*>(nullptr), 0,
     static_cast<const std::int64_t*>(nullptr), 0, static_cast<const std::int64_t*>(nullptr),

@@ -8,6 +8,7 @@
 #include "stmPlaneFrame.h"
 #include "stmSMPExecutor.h"
 
+#include "Common/ExactSum.h"
 #include "Cut/LevelSetProjection.h"
 #include "Smooth/BoundarySmooth.h"
 #include "Smooth/InteriorEdgeSplit.h"
@@ -332,6 +333,55 @@ const std::uint8_t* RootColours(vtkAlgorithm* filter, vtkUnstructuredGrid* input
   return values;
 }
 
+/// The mean length of the edges of the own cells (no ghost, by ghostCells when given), each
+/// edge counted once per cell. With a controller, of every piece's own cells (collective): the
+/// exact sums' parts are gathered, so the pieces get the whole mesh's value bit for bit.
+template <int Dim, class IdType>
+double MeanEdgeLength(const double* coordinates, const IdType* connectivity, std::int64_t cells,
+  const unsigned char* ghostCells, vtkMultiProcessController* controller)
+{
+  stm::ExactSum lengths;
+  std::int64_t edges = 0;
+  for (std::int64_t c = 0; c < cells; ++c)
+  {
+    if (ghostCells && ghostCells[c])
+    {
+      continue;
+    }
+    const IdType* corners = connectivity + c * (Dim + 1);
+    for (int a = 0; a < Dim; ++a)
+    {
+      for (int b = a + 1; b <= Dim; ++b)
+      {
+        double squared = 0.0;
+        for (int axis = 0; axis < Dim; ++axis)
+        {
+          const double d = coordinates[static_cast<std::int64_t>(corners[a]) * Dim + axis] -
+            coordinates[static_cast<std::int64_t>(corners[b]) * Dim + axis];
+          squared += d * d;
+        }
+        lengths.Add(std::sqrt(squared));
+        ++edges;
+      }
+    }
+  }
+  if (controller)
+  {
+    const std::vector<double> parts =
+      stmPieceBorder::detail::AllGather(controller, lengths.Parts());
+    lengths = stm::ExactSum();
+    for (double part : parts)
+    {
+      lengths.Add(part);
+    }
+    const vtkTypeInt64 own = edges;
+    vtkTypeInt64 all = 0;
+    controller->AllReduce(&own, &all, 1, vtkCommunicator::SUM_OP);
+    edges = all;
+  }
+  return edges > 0 ? lengths.Value() / static_cast<double>(edges) : 0.0;
+}
+
 template <int Dim, class IdType>
 stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
 {
@@ -390,17 +440,14 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
 
   // The projector: Newton steps onto f = 0 of the implicit function, in the frame. VTK's
   // implicit functions may update a transform when evaluated, so evaluations are serialised.
-  // The mean edge (the projector's step limit) only with a projector: a serial pass over every
-  // cell through vtkPoints costs a noticeable part of the smoothing of a large mesh.
+  // The mean edge (the projector's step limit and tolerance scale) only with a projector: a
+  // serial pass over every cell costs a noticeable part of the smoothing of a large mesh. It is
+  // the whole mesh's in every piece that exchanges, so that the pieces project as it does.
   vtkImplicitFunction* function = request.Function;
-  double meanEdge = 0.0;
-  for (vtkIdType c = 0; function && c < cells; ++c)
-  {
-    double a[3], b[3];
-    inputPoints->GetPoint(connectivity[c * (Dim + 1)], a);
-    inputPoints->GetPoint(connectivity[c * (Dim + 1) + 1], b);
-    meanEdge += std::sqrt(vtkMath::Distance2BetweenPoints(a, b)) / cells;
-  }
+  const double meanEdge = function
+    ? MeanEdgeLength<Dim>(local.data(), connectivity, cells, request.Options.GhostCells,
+        exchange ? request.Controller : nullptr)
+    : 0.0;
   std::mutex evaluation;
   auto evaluate = [&](const double* position, double* gradient, const double* base)
   {

@@ -77,21 +77,38 @@ stm::Status Snap(SnapRequest& request, const IdType* connectivity, std::string& 
     // intersection); the snap sets f to exactly IsoValue.
     projection.Tolerance =
       request.Options.ZeroTolerance > 0 ? std::min(request.Options.ZeroTolerance, 1e-12) : 1e-12;
-    projection.MaxDistance = std::max(input->GetLength(), 1e-300);
-    auto projector = [&](std::int64_t point, const double*, const double* target, double* result)
+    // The Newton steps stay within the box of the vertex's cells (starBox), whatever the piece:
+    // a piece's gray image covers its points' bounds, and a step beyond them would fail in a
+    // piece where the whole image lets it converge.
+    auto projector = [&](std::int64_t point, const double*, const double* target,
+                       const double* starBox, double* result)
     {
       double x[Dim], original[3];
       std::copy(target, target + Dim, x);
       inputPoints->GetPoint(static_cast<vtkIdType>(point), original);
+      stm::LevelSetProjectionOptions withinStar = projection;
+      withinStar.MaxDistance = 0.0;
+      for (int c = 0; c < Dim; ++c)
+      {
+        withinStar.MaxDistance += (starBox[Dim + c] - starBox[c]) * (starBox[Dim + c] - starBox[c]);
+      }
+      withinStar.MaxDistance = std::sqrt(withinStar.MaxDistance);
       auto evaluate = [&](const double* y, double* gradient)
       {
+        for (int c = 0; c < Dim; ++c)
+        {
+          if (!(y[c] >= starBox[c] && y[c] <= starBox[Dim + c]))
+          {
+            return std::nan("");
+          }
+        }
         double position[3], spatialGradient[3];
         frame.Lift<Dim>(y, original, position);
         const double value = surface->EvaluateWithGradient(position, spatialGradient);
         frame.FlattenGradient<Dim>(spatialGradient, gradient);
         return value;
       };
-      if (!stm::ProjectToLevelSet<Dim>(x, evaluate, projection))
+      if (!stm::ProjectToLevelSet<Dim>(x, evaluate, withinStar))
       {
         return false;
       }

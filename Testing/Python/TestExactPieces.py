@@ -9,8 +9,10 @@ With every part on, the owned cells of the P pieces are the serial mesh's cells 
 nested ellipsoids with a one-voxel layer to MultiMaterialCut (volume targets from its
 OriginalMaterialVolumes, and from the cells' OriginalMaterial with bounds tight enough that the
 improvement moves points; with noise at the centre, where the serial run splits edges, to
-MultiMaterialCut), and a 2D image to MarchingSimplices. And an abort on rank 1 halfway through
-the exchanged smoothing stops every rank.
+MultiMaterialCut), a ball cut, snapped and smoothed onto an ellipsoid (vtkQuadric: the snap's
+projections within each point's cells, the smoothing's with the whole mesh's mean edge), and a
+2D image to MarchingSimplices. And an abort on rank 1 halfway through the exchanged smoothing
+stops every rank.
 """
 import os
 
@@ -18,7 +20,7 @@ import numpy as np
 
 import spacetreemesh
 import stmtesting as T
-from vtkmodules.vtkCommonDataModel import vtkDataObject
+from vtkmodules.vtkCommonDataModel import vtkDataObject, vtkQuadric
 from vtkmodules.vtkCommonExecutionModel import vtkTrivialProducer
 from vtkmodules.vtkFiltersGeneral import vtkPassArrays
 
@@ -42,10 +44,21 @@ def chain(image, cut, targets="field"):
             remove.RemoveArraysOn()
             remove.AddArray(vtkDataObject.FIELD, "OriginalMaterialVolumes")
             remove.AddArray(vtkDataObject.FIELD, "OriginalMaterialVolumeParts")
+    elif cut == "function":
+        # The ellipsoid separates, the snap projects onto it and the smoothing too.
+        function = T.append_stages(stages, spacetreemesh.stmSeparatingFunction)
+        function.SetImplicitFunction(ELLIPSOID)
+        snap = T.append_stages(stages, spacetreemesh.stmVertexSnap)
+        snap.SetProjection(spacetreemesh.stmVertexSnap.FUNCTION)
+        snap.SetImplicitFunction(ELLIPSOID)
+        T.append_stages(stages, spacetreemesh.stmMarchingSimplices)
     else:
         T.append_stages(stages, spacetreemesh.stmVertexSnap, spacetreemesh.stmMarchingSimplices)
     smooth = T.append_stages(stages, spacetreemesh.stmBoundarySmooth)
     smooth.SetRestoreOriginalVolumes(cut == "materials")
+    if cut == "function":
+        smooth.SetProjectToFunction(True)
+        smooth.SetImplicitFunction(ELLIPSOID)
     if targets == "cells":
         smooth.SetMaxConditionNumber(2.0)
         smooth.SetMinDihedralAngle(25.0)
@@ -121,6 +134,16 @@ noisy = three_d.copy()
 noisy[15:25, 13:23, 17:27] = np.random.RandomState(2).randint(1, 5, size=(10, 10, 10))
 check(noisy, 4, "materials", "3D with noise at the centre to MultiMaterialCut, smoothed and "
       "split", must_split=True)
+# An ellipsoid x^2/17^2 + y^2/14^2 + z^2/19^2 - 1 about the centre of a ball of label 1: the
+# pieces project their points onto it as the serial mesh does (the snap within each point's
+# cells, the smoothing with the whole mesh's mean edge).
+ELLIPSOID = vtkQuadric()
+ELLIPSOID.SetCoefficients(1.0 / 17 ** 2, 1.0 / 14 ** 2, 1.0 / 19 ** 2, 0, 0, 0,
+                          -2 * 20.2 / 17 ** 2, -2 * 18.1 / 14 ** 2, -2 * 22.3 / 19 ** 2,
+                          20.2 ** 2 / 17 ** 2 + 18.1 ** 2 / 14 ** 2 + 22.3 ** 2 / 19 ** 2 - 1)
+zz, yy, xx = np.mgrid[0:44, 0:36, 0:40] + 0.5
+ball = ((xx - 20) ** 2 + (yy - 18) ** 2 + (zz - 22) ** 2 < 21 ** 2).astype(np.uint8)
+check(ball, 4, "function", "3D ellipsoid function, snapped and smoothed onto it")
 yy, xx = np.mgrid[0:70, 0:64]
 two_d = ((xx - 30.5) ** 2 / 26.0 ** 2 + (yy - 36.0) ** 2 / 30.0 ** 2 < 1.0).astype(np.uint8)
 two_d[(xx - 30.5) ** 2 + (yy - 30.0) ** 2 < 12.0 ** 2] = 2

@@ -120,7 +120,10 @@ struct VertexSnapCounts
 /// The projector that never projects: every snapped vertex goes to its edge's intersection.
 struct NoSnapProjection
 {
-  bool operator()(std::int64_t, const double*, const double*, double*) const { return false; }
+  bool operator()(std::int64_t, const double*, const double*, const double*, double*) const
+  {
+    return false;
+  }
 };
 
 namespace detail
@@ -152,9 +155,13 @@ public:
 
   /// points: Dim coordinates per point; values: one per point; both are updated for the
   /// snapped vertices (values exactly IsoValue). projector(point, const double* current, const
-  /// double* target, double* result) may place a snapped vertex elsewhere than the edge's
-  /// intersection `target` (e.g. onto the true surface of an implicit function): it writes
-  /// result and returns true, or returns false for the target. A result that is not finite or
+  /// double* target, const double* starBox, double* result) may place a snapped vertex
+  /// elsewhere than the edge's intersection `target` (e.g. onto the true surface of an implicit
+  /// function): it writes result and returns true, or returns false for the target. starBox
+  /// holds the lower then the upper corner (Dim values each) of the box around the cells of the
+  /// vertex. A projector that evaluates its function only within that box makes the result a
+  /// function of those cells alone, so that the pieces of a distributed mesh, each holding the
+  /// cells around its vertices, place a shared vertex alike. A result that is not finite or
   /// lies farther from the vertex than the length of its edge is replaced by the target. The
   /// projector is called from several threads at once. On Aborted the arrays are partly updated.
   template <class IdType, class Projector, class Executor>
@@ -752,13 +759,28 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     const double t = fa / (fa - fb); // the cut vertex of MarchingSimplices
     double target[Dim];
     double edgeLength = 0.0;
+    double starBox[2 * Dim];
     for (int c = 0; c < Dim; ++c)
     {
       target[c] = (1.0 - t) * points[lower * Dim + c] + t * points[upper * Dim + c];
       edgeLength += (x[c] - y[c]) * (x[c] - y[c]);
+      starBox[c] = starBox[Dim + c] = x[c];
     }
-    bool projected =
-      projector(v, static_cast<const double*>(x), static_cast<const double*>(target), position);
+    for (std::int64_t j = offsets[v]; j < offsets[v + 1]; ++j)
+    {
+      const IdType* ids = connectivity + incident[j] * (Dim + 1);
+      for (int k = 0; k <= Dim; ++k)
+      {
+        const double* corner = points + static_cast<std::int64_t>(ids[k]) * Dim;
+        for (int c = 0; c < Dim; ++c)
+        {
+          starBox[c] = std::min(starBox[c], corner[c]);
+          starBox[Dim + c] = std::max(starBox[Dim + c], corner[c]);
+        }
+      }
+    }
+    bool projected = projector(v, static_cast<const double*>(x), static_cast<const double*>(target),
+      static_cast<const double*>(starBox), position);
     double moveLength = 0.0;
     for (int c = 0; c < Dim && projected; ++c)
     {

@@ -326,17 +326,20 @@ TEST(VertexSnap, AlphaHalfLeavesNoCutEdge)
 
 TEST(VertexSnap, ProjectorPlacesTheVertexWithinItsEdgeLength)
 {
-  const std::vector<double> points{ 0, 0, 1, 0, 0, 1 };
-  const std::vector<double> values{ -1, 3, 3 };
-  const std::vector<std::int64_t> cells{ 0, 1, 2 };
+  // The second triangle is not around vertex 0: the box of 0's cells leaves out (2, 2).
+  const std::vector<double> points{ 0, 0, 1, 0, 0, 1, 2, 2 };
+  const std::vector<double> values{ -1, 3, 3, 3 };
+  const std::vector<std::int64_t> cells{ 0, 1, 2, 1, 3, 2 };
   stm::SequentialExecutor executor;
   stm::VertexSnapOptions options;
   std::vector<std::int64_t> asked;
-  auto near = [&](std::int64_t point, const double* current, const double* target, double* result)
+  auto near = [&](std::int64_t point, const double* current, const double* target,
+                const double* starBox, double* result)
   {
     asked.push_back(point);
     EXPECT_EQ(current[0], 0.0);
     EXPECT_EQ(target[0], 0.25);
+    EXPECT_EQ(std::vector<double>(starBox, starBox + 4), (std::vector<double>{ 0, 0, 1, 1 }));
     result[0] = 0.2;
     result[1] = 0.1;
     return true;
@@ -347,14 +350,15 @@ TEST(VertexSnap, ProjectorPlacesTheVertexWithinItsEdgeLength)
   EXPECT_EQ(projected.Points[1], 0.1);
   EXPECT_EQ(projected.Values[0], 0.0);
   // Farther than the edge (length 1) from the vertex, or declined: the edge's intersection.
-  auto far = [](std::int64_t, const double*, const double*, double* result)
+  auto far = [](std::int64_t, const double*, const double*, const double*, double* result)
   {
     result[0] = 0.9;
     result[1] = 0.9;
     return true;
   };
   EXPECT_EQ(Snap<2>(points, values, cells, options, executor, far).Points[0], 0.25);
-  auto declined = [](std::int64_t, const double*, const double*, double*) { return false; };
+  auto declined = [](std::int64_t, const double*, const double*, const double*, double*)
+  { return false; };
   EXPECT_EQ(Snap<2>(points, values, cells, options, executor, declined).Points[0], 0.25);
 }
 
