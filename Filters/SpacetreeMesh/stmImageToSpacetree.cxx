@@ -31,6 +31,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <vector>
 
@@ -146,6 +147,24 @@ CollectLabels LabelsOf(vtkDataArray* labels)
     collect(labels);
   }
   return collect;
+}
+
+/// The body of interest's labels, sorted and distinct: `bodyLabels` when given, else every
+/// label present (sorted, distinct) but the background.
+std::vector<long long> BodyOf(const std::vector<int>& bodyLabels, int backgroundLabel,
+  const std::vector<long long>& presentLabels)
+{
+  std::vector<long long> body;
+  if (bodyLabels.empty())
+  {
+    std::copy_if(presentLabels.begin(), presentLabels.end(), std::back_inserter(body),
+      [backgroundLabel](long long label) { return label != backgroundLabel; });
+    return body;
+  }
+  body.assign(bodyLabels.begin(), bodyLabels.end());
+  std::sort(body.begin(), body.end());
+  body.erase(std::unique(body.begin(), body.end()), body.end());
+  return body;
 }
 
 /// Every voxel's material for the sorted body labels (MapToMaterials), by the same two paths.
@@ -751,13 +770,13 @@ void SlabOfRank(const PieceLayout& piece, int rank, int ranks, long long& firstL
   const long long layers = piece.RootGrid[last];
   firstLayer = rank * layers / ranks;
   endLayer = (rank + 1) * layers / ranks;
-  const int empty[6] = { 0, -1, 0, -1, 0, -1 };
-  std::copy(firstLayer < endLayer ? piece.WholeExtent : empty,
-    (firstLayer < endLayer ? piece.WholeExtent : empty) + 6, extent);
   if (firstLayer >= endLayer)
   {
+    const int empty[6] = { 0, -1, 0, -1, 0, -1 };
+    std::copy(empty, empty + 6, extent);
     return;
   }
+  std::copy(piece.WholeExtent, piece.WholeExtent + 6, extent);
   const int axis = piece.ImageAxes[last];
   const long long lower = piece.WholeExtent[2 * axis];
   extent[2 * axis] = static_cast<int>(lower + firstLayer * piece.RootVoxels[last]);
@@ -1273,19 +1292,8 @@ int stmImageToSpacetree::SumRootCellCostsOverSlabs(vtkInformation* request,
       voxelDims[axis] = VoxelsAlong(pointDims[axis], cellLabels);
       inputFirst[axis] = extent[2 * axis] - piece.WholeExtent[2 * axis];
     }
-    std::vector<long long> body(this->BodyLabels.begin(), this->BodyLabels.end());
-    if (body.empty())
-    {
-      for (long long label : LabelsOf(labels).Labels)
-      {
-        if (label != this->BackgroundLabel)
-        {
-          body.push_back(label);
-        }
-      }
-    }
-    std::sort(body.begin(), body.end());
-    body.erase(std::unique(body.begin(), body.end()), body.end());
+    const std::vector<long long> body = BodyOf(this->BodyLabels, this->BackgroundLabel,
+      this->BodyLabels.empty() ? LabelsOf(labels).Labels : std::vector<long long>());
     const vtkIdType voxels = static_cast<vtkIdType>(voxelDims[0]) * voxelDims[1] * voxelDims[2];
     if (!body.empty() && body.size() <= 65535 && labels->GetNumberOfTuples() == voxels)
     {
@@ -1531,16 +1539,10 @@ int stmImageToSpacetree::RequestData(vtkInformation* pipelineRequest,
     vtkErrorMacro("The label array holds values outside the 32-bit integer range.");
     return 0;
   }
-  std::vector<long long> body;
+  const std::vector<long long> body =
+    BodyOf(this->BodyLabels, this->BackgroundLabel, collect.Labels);
   if (this->BodyLabels.empty())
   {
-    for (long long label : collect.Labels)
-    {
-      if (label != this->BackgroundLabel)
-      {
-        body.push_back(label);
-      }
-    }
     if (body.empty())
     {
       if (splitting)
@@ -1574,9 +1576,6 @@ int stmImageToSpacetree::RequestData(vtkInformation* pipelineRequest,
   }
   else
   {
-    body.assign(this->BodyLabels.begin(), this->BodyLabels.end());
-    std::sort(body.begin(), body.end());
-    body.erase(std::unique(body.begin(), body.end()), body.end());
     for (long long label : body)
     {
       if (label == this->BackgroundLabel)
