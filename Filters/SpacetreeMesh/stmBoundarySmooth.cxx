@@ -435,6 +435,18 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
       vtkDebugWithObjectMacro(request.Filter,
         "exchanging " << exchange->GetNumberOfSentPoints() << " points; "
                       << exchange->GetNumberOfUnmatchedPoints() << " held points unmatched");
+      // Every point of a ghost cell lies in a cell of the piece that moves it, which sends it:
+      // one without a match is a point the other pieces' meshes do not have.
+      if (exchange->GetNumberOfUnmatchedPoints() > 0)
+      {
+        vtkWarningWithObjectMacro(request.Filter,
+          "The pieces' meshes differ where they meet, so the mesh may have cracks there: of the "
+          "points of this piece's ghost cells, "
+            << exchange->GetNumberOfUnmatchedPoints()
+            << " are no point of the pieces that own those cells (the snapping decided a point on "
+               "their border differently; see docs/design.md, \"Why two root cells of "
+               "ghosts\"). The smoothing leaves them where this piece has them.");
+      }
     }
   }
 
