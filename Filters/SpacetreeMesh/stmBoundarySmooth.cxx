@@ -26,7 +26,6 @@
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
 #include "vtkLookupTable.h"
-#include "vtkMath.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
