@@ -4,9 +4,11 @@
 #include "stmCutInput.h"
 #include "stmFunctionValues.h"
 #include "stmGrayImagePieces.h"
+#include "stmPieceExchange.h"
 #include "stmPieces.h"
 #include "stmPlaneFrame.h"
 #include "stmSMPExecutor.h"
+#include "stmSnapExchange.h"
 #include "stmSurfaceFunction.h"
 
 #include "Cut/LevelSetProjection.h"
@@ -30,6 +32,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -49,7 +52,22 @@ struct SnapRequest
   std::vector<double> MovedPositions; // 3 per moved point
   std::vector<std::uint8_t> Moved;    // 1 moved, 2 nudged
   stm::VertexSnapCounts Counts;
+  // Pieces on the ranks of an MPI run: the controller, and whether this rank has taken its part
+  // in the agreement on exchanging the snap's states (stmSnapExchange).
+  vtkMultiProcessController* Controller = nullptr;
+  bool ExchangeAgreed = false;
 };
+
+/// This rank's part in the agreement on exchanging when it snaps nothing (an empty piece, or a
+/// failure before the snap): no rank then exchanges.
+void TakePartWithNothing(SnapRequest& request)
+{
+  if (request.Controller && !request.ExchangeAgreed)
+  {
+    request.ExchangeAgreed = true;
+    stmPieceExchange::AllAgree(request.Controller, false);
+  }
+}
 
 template <int Dim, class IdType>
 stm::Status Snap(SnapRequest& request, const IdType* connectivity, std::string& error)
@@ -60,9 +78,27 @@ stm::Status Snap(SnapRequest& request, const IdType* connectivity, std::string& 
   stmPlaneFrame frame;
   if (!frame.Build(input, Dim, "vertex snapping needs a planar triangle mesh", error))
   {
+    TakePartWithNothing(request);
     return stm::Status::Invalid(error);
   }
   std::vector<double> coordinates = frame.CoreCoordinates<Dim>(inputPoints);
+  // Pieces on the ranks of an MPI run decide as the whole mesh does (stmSnapExchange), if every
+  // rank has a piece with ghost cells.
+  std::unique_ptr<stmSnapExchange> exchange;
+  if (request.Controller)
+  {
+    request.ExchangeAgreed = true;
+    const unsigned char* ghosts = stmPieces::GhostCellFlags(input);
+    const vtkIdType cells = input->GetNumberOfCells();
+    const bool can =
+      ghosts && std::any_of(ghosts, ghosts + cells, [](unsigned char g) { return g != 0; });
+    if (stmPieceExchange::AllAgree(request.Controller, can))
+    {
+      exchange = std::make_unique<stmSnapExchange>(request.Controller, inputPoints,
+        stmSnapExchange::FindOwnPoints<Dim>(connectivity, cells, numberOfPoints, ghosts));
+      request.Options.Exchange = exchange.get();
+    }
+  }
 
   stmSMPExecutor executor(request.Filter);
   executor.SetProgressRange(0.1, 0.9);
@@ -126,6 +162,16 @@ stm::Status Snap(SnapRequest& request, const IdType* connectivity, std::string& 
   if (!status.IsOk())
   {
     return status;
+  }
+  // A held point that no piece sends lies on another piece's own cell that piece does not have.
+  if (exchange && exchange->GetNumberOfUnmatchedPoints() > 0)
+  {
+    vtkWarningWithObjectMacro(request.Filter,
+      "The pieces' meshes differ where they meet: of the points of this piece's ghost cells "
+      "whose snap it decides, "
+        << exchange->GetNumberOfUnmatchedPoints()
+        << " are no point of the pieces that own those cells, which decide them; this piece "
+           "decides them without the other pieces, and the mesh may have cracks there.");
   }
   request.Moved = snap.GetMovedFlags();
   const std::vector<std::uint8_t>& nudged = snap.GetNudgedFlags();
@@ -226,9 +272,12 @@ int stmVertexSnap::RequestData(vtkInformation* pipelineRequest, vtkInformationVe
   this->NumberOfRefusedSnaps = 0;
   this->NumberOfAdjustedPoints = 0;
   output->Initialize();
+  SnapRequest request{ this, input, nullptr, {}, nullptr, {}, {}, {}, {} };
+  request.Controller = stmPieces::ControllerOfPieces(outputVector->GetInformationObject(0));
   auto fail = [&](const std::string& message)
   {
     output->Initialize();
+    TakePartWithNothing(request);
     vtkErrorMacro(<< "VertexSnap failed: " << message);
     return 0;
   };
@@ -237,7 +286,8 @@ int stmVertexSnap::RequestData(vtkInformation* pipelineRequest, vtkInformationVe
     stmCutInput::Preflight(inputVector[0], input, stmCutInput::TessellateSimplicialFirst, error);
   if (dimension < 0)
   {
-    return 1; // an upstream filter was aborted: an empty output, quietly
+    TakePartWithNothing(request);
+    return 1; // an empty piece, or an upstream filter was aborted: an empty output, quietly
   }
   if (dimension == 0)
   {
@@ -287,7 +337,8 @@ int stmVertexSnap::RequestData(vtkInformation* pipelineRequest, vtkInformationVe
     values.assign(source, source + function->GetNumberOfTuples());
   }
   this->UpdateProgress(0.05);
-  SnapRequest request{ this, input, &values, {}, project ? &surface : nullptr, {}, {}, {}, {} };
+  request.Values = &values;
+  request.Surface = project ? &surface : nullptr;
   request.Options.Alpha = this->Alpha;
   request.Options.QualityBound = this->QualityBound;
   request.Options.Rule =
@@ -300,6 +351,7 @@ int stmVertexSnap::RequestData(vtkInformation* pipelineRequest, vtkInformationVe
   if (!status.IsOk())
   {
     output->Initialize();
+    TakePartWithNothing(request);
     if (this->GetAbortExecute() || status.GetCode() == stm::Status::Code::Aborted)
     {
       return 1;

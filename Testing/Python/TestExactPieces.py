@@ -11,8 +11,8 @@ OriginalMaterialVolumes, and from the cells' OriginalMaterial with bounds tight 
 improvement moves points; with noise at the centre, where the serial run splits edges, to
 MultiMaterialCut), a ball cut, snapped and smoothed onto an ellipsoid (vtkQuadric: the snap's
 projections within each point's cells, the smoothing's with the whole mesh's mean edge), and a
-2D image to MarchingSimplices. And an abort on rank 1 halfway through the exchanged smoothing
-stops every rank.
+2D image to MarchingSimplices. And an abort on rank 1 halfway through the exchanged smoothing,
+or in the exchanged snap before and during its rounds, stops every rank.
 """
 import os
 
@@ -175,3 +175,30 @@ T.check(smooth.GetOutput().GetNumberOfCells() == 0,
 controller.Barrier()
 if rank == 0:
     print("abort on rank 1 during the exchanged smoothing: every rank stopped")
+
+# An abort on rank 1 in the snap, before its rounds (progress 0.5) and during them: every rank
+# stops at the same agreement (the pieces agree before every round while they exchange), none
+# waits for the others, and no rank reports an error.
+for at in (0.5, 0.7):
+    stages = chain(T.make_image(ball), "function")
+    snap = [stage for stage in stages if stage.IsA("stmVertexSnap")][0]
+    stopped = []
+
+    def abort_snap(caller, event):
+        if rank == 1 and caller.GetProgress() >= at and not stopped:
+            stopped.append(caller.GetProgress())
+            caller.SetAbortExecute(1)
+
+    snap.AddObserver("ProgressEvent", abort_snap)
+    errors = [T.ErrorCollector(stage) for stage in stages[1:]]
+    T.check(stages[-1].UpdatePiece(rank, ranks, 0) == 1, "snap abort: rank %d failed" % rank)
+    T.check(not any(e.errors for e in errors), "snap abort at %g: rank %d: %r" % (
+        at, rank, [e.errors for e in errors]))
+    T.check(rank != 1 or stopped, "snap abort: rank 1 never reached %g of the snap" % at)
+    T.check(snap.GetOutput().GetNumberOfCells() == 0,
+            "snap abort at %g: rank %d kept %d cells" % (at, rank,
+                                                         snap.GetOutput().GetNumberOfCells()))
+    controller.Barrier()
+    if rank == 0:
+        print("abort on rank 1 at %g of the exchanged snap: every rank stopped" % at)
+

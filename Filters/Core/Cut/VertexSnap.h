@@ -47,12 +47,18 @@
 // (MinimumRelativeVolume). After each round the neighbours of snapped and nudged vertices recompute
 // their claims, and the neighbours of nudged ones may become candidates, until no candidate is
 // left.
+//
+// A piece of a distributed mesh (VertexSnapOptions::Exchange) decides as the whole mesh does:
+// after every round (and every round of revisits) it takes the states of the points it holds
+// from the pieces whose own cells have them (SnapExchange), so its ghost cells need only reach
+// as far as one round's decisions read (two rings of cells), not as far as their chains go.
 
 #include "../Check/SimplexQuality.h"
 #include "../Common/Determinant.h"
 #include "../Common/Execution.h"
 #include "../Common/Status.h"
 #include "MarchingSimplices.h"
+#include "SnapExchange.h"
 
 #include <algorithm>
 #include <atomic>
@@ -92,6 +98,9 @@ struct VertexSnapOptions
   /// may still be nudged); null: every point may move. The multi-material cut fixes the points
   /// of cells whose material is already assigned.
   const std::uint8_t* Movable = nullptr;
+  /// The exchanges with the other pieces of a distributed mesh (SnapExchange), or null for a
+  /// whole mesh. With it, the points of the piece's own cells get the whole mesh's decisions.
+  SnapExchange* Exchange = nullptr;
 };
 
 struct VertexSnapCounts
@@ -186,7 +195,7 @@ public:
   /// Per point: 1 where the last Snap nudged it (changed its value, not its place).
   const std::vector<std::uint8_t>& GetNudgedFlags() const { return this->Nudged; }
   /// Per moved point: the other end of the edge it snapped along (from its first place); -1
-  /// where it did not move.
+  /// where it did not move, and where a piece took the point's state from another piece.
   const std::vector<std::int64_t>& GetSnapEdges() const { return this->SnapEdges; }
   const VertexSnapCounts& GetCounts() const { return this->Counts; }
 
@@ -420,6 +429,17 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
   const IdType* connectivity, std::int64_t numberOfCells, const VertexSnapOptions& options,
   Projector&& projector, Executor& executor)
 {
+  // A piece that stops before the rounds tells the others, which would wait for it otherwise
+  // (1: aborted, 2: failed; the agreement before the rounds).
+  SnapExchange* const exchange = options.Exchange;
+  auto stopBeforeRounds = [exchange](Status status)
+  {
+    if (exchange)
+    {
+      exchange->Maximum(status.GetCode() == Status::Code::Aborted ? 1.0 : 2.0);
+    }
+    return status;
+  };
   this->Counts = VertexSnapCounts();
   this->Moved.assign(static_cast<std::size_t>(std::max<std::int64_t>(numberOfPoints, 0)), 0);
   this->Refused.assign(this->Moved.size(), 0);
@@ -429,12 +449,13 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     !(options.QualityBound >= 0.0) || !std::isfinite(options.ZeroTolerance) ||
     !std::isfinite(options.IsoValue))
   {
-    return Status::Invalid("vertex snapping needs 0 <= Alpha <= 0.5, a finite iso-value, a "
-                           "finite zero tolerance >= 0 and a quality bound >= 0");
+    return stopBeforeRounds(
+      Status::Invalid("vertex snapping needs 0 <= Alpha <= 0.5, a finite iso-value, a "
+                      "finite zero tolerance >= 0 and a quality bound >= 0"));
   }
   if (numberOfPoints < 0 || numberOfCells < 0)
   {
-    return Status::Invalid("negative numbers of points or cells");
+    return stopBeforeRounds(Status::Invalid("negative numbers of points or cells"));
   }
   const double iso = options.IsoValue;
   const double tolerance = options.ZeroTolerance;
@@ -468,12 +489,13 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     });
   if (executor.ShouldAbort())
   {
-    return Status::Aborted();
+    return stopBeforeRounds(Status::Aborted());
   }
   if (invalid)
   {
-    return Status::Invalid("the separating function has NaN or infinite values (or f - iso "
-                           "overflows); a separating function must be finite at every point");
+    return stopBeforeRounds(
+      Status::Invalid("the separating function has NaN or infinite values (or f - iso "
+                      "overflows); a separating function must be finite at every point"));
   }
 
   // Ends of cut edges: the only points that can claim a snap, and the only ones whose incident
@@ -560,11 +582,11 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
       });
     if (executor.ShouldAbort())
     {
-      return Status::Aborted();
+      return stopBeforeRounds(Status::Aborted());
     }
     if (badIds)
     {
-      return Status::Invalid("a cell refers to a point id outside the mesh");
+      return stopBeforeRounds(Status::Invalid("a cell refers to a point id outside the mesh"));
     }
     detail::SnapFor(executor, numberOfPoints, 1 << 16,
       [&](std::int64_t begin, std::int64_t end)
@@ -600,7 +622,7 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     });
   if (executor.ShouldAbort())
   {
-    return Status::Aborted();
+    return stopBeforeRounds(Status::Aborted());
   }
   std::vector<std::int64_t> offsets(static_cast<std::size_t>(numberOfPoints) + 1, 0);
   for (std::int64_t p = 0; p < numberOfPoints; ++p)
@@ -639,7 +661,7 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     });
   if (executor.ShouldAbort())
   {
-    return Status::Aborted();
+    return stopBeforeRounds(Status::Aborted());
   }
   executor.ReportProgress(0.45);
 
@@ -655,12 +677,17 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     }
   }
   std::vector<std::uint8_t>().swap(active);
-  // QualityDriven revisits decisions (below): the active points' first places and values.
+  // QualityDriven revisits decisions (below): the active points' first places and values. The
+  // active points are also the only ones whose states the pieces of a distributed mesh share:
+  // a nudge keeps a point's sign and a snap makes it zero, so no cell gains both signs.
   std::vector<std::int64_t> activePoints;
   std::vector<double> originals; // Dim coordinates and the value per active point
-  if (qualityDriven)
+  if (qualityDriven || exchange)
   {
     activePoints = candidates;
+  }
+  if (qualityDriven)
+  {
     originals.resize(activePoints.size() * (Dim + 1));
     for (std::size_t i = 0; i < activePoints.size(); ++i)
     {
@@ -1024,20 +1051,130 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     decisions[v] = decision;
     const Outcome outcome = static_cast<Outcome>(decision & OutcomeMask);
     this->Moved[v] = outcome == Snapped ? 1 : 0;
-    this->Refused[v] = outcome == Snapped ? 0 : 1;
+    this->Refused[v] = outcome == Snapped || outcome == Waiting ? 0 : 1;
     this->Nudged[v] = (decision & NudgedFlag) ? 1 : 0;
   };
 
-  // Rounds of independent local minima.
+  // A distributed mesh's pieces agree to start (or that one stopped), make the lists, and take
+  // the states of the points they hold from the pieces whose own cells have them: a candidate
+  // near the ghost cells' far end may have claimed without all its cells.
   std::vector<std::uint8_t> changedNow(static_cast<std::size_t>(numberOfPoints), 0);
+  // Per shared point: its place, value and decision, and two flags (in the rounds whether it is
+  // a candidate; in the revisits whether it is listed, and its revisions).
+  constexpr int StateWidth = Dim + 4;
+  std::vector<double> sentStates, receivedStates;
+  // Sends this piece's states, takes the received ones and returns the points they changed.
+  auto shareStates = [&](auto&& flagsOf, auto&& takeFlags)
+  {
+    auto pack = [&](std::int64_t slot, double* state)
+    {
+      const std::int64_t p = activePoints[slot];
+      std::copy(points + p * Dim, points + (p + 1) * Dim, state);
+      state[Dim] = values[p];
+      state[Dim + 1] = decisions[p];
+      flagsOf(slot, state + Dim + 2);
+    };
+    const std::vector<std::int64_t>& sent = exchange->GetSent();
+    sentStates.resize(sent.size() * StateWidth);
+    for (std::size_t i = 0; i < sent.size(); ++i)
+    {
+      pack(sent[i], sentStates.data() + i * StateWidth);
+    }
+    exchange->Share(sentStates, StateWidth, receivedStates);
+    const std::vector<std::int64_t>& received = exchange->GetReceived();
+    std::vector<std::int64_t> changed;
+    for (std::size_t i = 0; i < received.size(); ++i)
+    {
+      const double* state = receivedStates.data() + i * StateWidth;
+      double present[StateWidth] = {};
+      pack(received[i], present);
+      if (std::equal(state, state + StateWidth, present))
+      {
+        continue;
+      }
+      const std::int64_t p = activePoints[received[i]];
+      std::copy(state, state + Dim, points + p * Dim);
+      values[p] = state[Dim];
+      const double difference = values[p] - iso;
+      classes[p] = static_cast<std::int8_t>(difference < -tolerance ? VertexClass::Negative
+          : difference > tolerance                                  ? VertexClass::Positive
+                                                                    : VertexClass::Zero);
+      const auto decision = static_cast<std::uint8_t>(state[Dim + 1]);
+      record(p, decision);
+      // Which edge another piece snapped along is not sent.
+      this->SnapEdges[p] = -1;
+      takeFlags(received[i], state + Dim + 2);
+      changed.push_back(p);
+    }
+    return changed;
+  };
+  // The candidates after an exchange: the listed points that are candidates, with the claims
+  // near the changed points (and of the changed points) computed again.
+  auto candidatesAfterExchange = [&](const std::vector<std::int64_t>& changed)
+  {
+    for (std::int64_t p : changed)
+    {
+      changedNow[p] = 1;
+    }
+    std::vector<std::int64_t> listed;
+    for (std::int64_t p : activePoints)
+    {
+      if (isCandidate[p])
+      {
+        listed.push_back(p);
+      }
+    }
+    std::vector<std::int64_t> refreshed = refreshClaims(listed, changedNow.data());
+    for (std::int64_t p : changed)
+    {
+      changedNow[p] = 0;
+    }
+    return refreshed;
+  };
+  auto shareCandidates = [&]()
+  {
+    const std::vector<std::int64_t> changed = shareStates(
+      [&](std::int64_t slot, double* flags)
+      {
+        flags[0] = isCandidate[activePoints[slot]];
+        flags[1] = 0.0;
+      },
+      [&](std::int64_t slot, const double* flags)
+      { isCandidate[activePoints[slot]] = static_cast<std::uint8_t>(flags[0]); });
+    candidates = candidatesAfterExchange(changed);
+  };
+  if (exchange)
+  {
+    const double stopped = exchange->Maximum(executor.ShouldAbort() ? 1.0 : 0.0);
+    if (stopped > 0.0)
+    {
+      return stopped > 1.0 ? Status::Invalid("another piece of the mesh could not be snapped")
+                           : Status::Aborted();
+    }
+    exchange->List(activePoints.data(), static_cast<std::int64_t>(activePoints.size()));
+    shareCandidates();
+  }
+  // Whether to go on with another round (every piece alike, while any piece has work), or
+  // Aborted.
+  auto goOn = [&](bool work, Status& status)
+  {
+    const bool abort = executor.ShouldAbort();
+    const double all = exchange ? exchange->Maximum(abort ? 2.0
+                                      : work              ? 1.0
+                                                          : 0.0)
+                                : (abort     ? 2.0
+                                      : work ? 1.0
+                                             : 0.0);
+    status = all > 1.0 ? Status::Aborted() : Status::Ok();
+    return all == 1.0;
+  };
+
+  // Rounds of independent local minima.
   std::vector<std::uint8_t> freshMark(static_cast<std::size_t>(numberOfPoints), 0);
   std::vector<std::uint8_t> outcomes;
-  while (!candidates.empty())
+  Status roundStatus;
+  while (goOn(!candidates.empty(), roundStatus))
   {
-    if (executor.ShouldAbort())
-    {
-      return Status::Aborted();
-    }
     ++this->Counts.Rounds;
     const auto count = static_cast<std::int64_t>(candidates.size());
     outcomes.assign(candidates.size(), Waiting);
@@ -1076,7 +1213,8 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
           }
         }
       });
-    if (executor.ShouldAbort())
+    // The pieces of a distributed mesh stop together, at the next round's agreement.
+    if (executor.ShouldAbort() && !exchange)
     {
       return Status::Aborted();
     }
@@ -1138,8 +1276,16 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
     {
       changedNow[v] = 0;
     }
+    if (exchange)
+    {
+      shareCandidates();
+    }
     executor.ReportProgress(
       0.5 + 0.4 * (1.0 - static_cast<double>(candidates.size()) / initialCandidates));
+  }
+  if (!roundStatus.IsOk())
+  {
+    return roundStatus;
   }
 
   // QualityDriven revisits: a decision was the best for the neighbours of its time, but later
@@ -1148,7 +1294,8 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
   // (and cut), and snapping or nudging from there, given their neighbours' present states; a
   // change must lower their worst. Rounds of local maxima of that worst (ties: smaller id)
   // share no cell; a point changes at most MaxRevisions times, so the pass ends.
-  if (qualityDriven && !activePoints.empty())
+  // Every piece of a distributed mesh takes part, with active points or without.
+  if (qualityDriven && (exchange || !activePoints.empty()))
   {
     const auto activeCount = static_cast<std::int64_t>(activePoints.size());
     // A point's slot by lookup, not by binary search in activePoints: the 1-ring walks below
@@ -1260,17 +1407,61 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
       classes[v] = presentClass;
       return Waiting;
     };
+    // The active slots around `changed` points (theirs included), sorted, measured again.
+    auto measureAround = [&](const std::vector<std::int64_t>& changed)
+    {
+      std::vector<std::int64_t> touched;
+      for (std::int64_t p : changed)
+      {
+        forEachActiveNeighbour(p,
+          [&](std::int64_t other)
+          {
+            touched.push_back(other);
+            return true;
+          });
+      }
+      std::sort(touched.begin(), touched.end());
+      touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+      measureWorst(touched);
+      return touched;
+    };
+    // A distributed mesh's pieces take the held points' states, listings and revisions from
+    // the pieces whose own cells have them, and measure again around the changed points.
+    auto shareListed = [&]()
+    {
+      const std::vector<std::int64_t> changed = shareStates(
+        [&](std::int64_t slot, double* flags)
+        {
+          flags[0] = listed[slot];
+          flags[1] = revisions[slot];
+        },
+        [&](std::int64_t slot, const double* flags)
+        {
+          listed[slot] = static_cast<std::uint8_t>(flags[0]);
+          revisions[slot] = static_cast<std::uint8_t>(flags[1]);
+        });
+      measureAround(changed);
+      list.clear();
+      for (std::int64_t slot = 0; slot < activeCount; ++slot)
+      {
+        if (listed[slot])
+        {
+          list.push_back(slot);
+        }
+      }
+    };
+    if (exchange)
+    {
+      shareListed();
+    }
     std::vector<std::uint8_t> outcomes;
     // Rounds shrink the list but may list a point again, so this is an estimate that never
     // goes back: on the AAL brain mask the revisits take about a third of the snap.
     const double initialListed = std::max<double>(1.0, static_cast<double>(list.size()));
     double revisitProgress = 0.0;
-    while (!list.empty())
+    Status revisitStatus;
+    while (goOn(!list.empty(), revisitStatus))
     {
-      if (executor.ShouldAbort())
-      {
-        return Status::Aborted();
-      }
       revisitProgress =
         std::max(revisitProgress, 1.0 - static_cast<double>(list.size()) / initialListed);
       executor.ReportProgress(0.9 + 0.1 * revisitProgress);
@@ -1307,13 +1498,13 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
             }
           }
         });
-      if (executor.ShouldAbort())
+      if (executor.ShouldAbort() && !exchange)
       {
         return Status::Aborted();
       }
       // Unselected points stay listed; selected ones leave, and come back (with their
       // neighbours) when they or a neighbour changed and are still bad.
-      std::vector<std::int64_t> next, touched;
+      std::vector<std::int64_t> next, changed;
       for (std::int64_t i = 0; i < count; ++i)
       {
         const std::int64_t slot = list[i];
@@ -1330,17 +1521,9 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
         ++revisions[slot];
         ++this->Counts.Revised;
         record(activePoints[slot], outcomes[i]);
-        forEachActiveNeighbour(activePoints[slot],
-          [&](std::int64_t other)
-          {
-            touched.push_back(other);
-            return true;
-          });
+        changed.push_back(activePoints[slot]);
       }
-      std::sort(touched.begin(), touched.end());
-      touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-      measureWorst(touched);
-      for (std::int64_t slot : touched)
+      for (std::int64_t slot : measureAround(changed))
       {
         if (!listed[slot] && worst[slot] > RevisitAbove && revisions[slot] < MaxRevisions)
         {
@@ -1350,6 +1533,14 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
       }
       std::sort(next.begin(), next.end());
       list.swap(next);
+      if (exchange)
+      {
+        shareListed();
+      }
+    }
+    if (!revisitStatus.IsOk())
+    {
+      return revisitStatus;
     }
   }
   for (std::int64_t v = 0; v < numberOfPoints; ++v)
