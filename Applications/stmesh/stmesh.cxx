@@ -328,7 +328,7 @@ Arguments:
                                          0.01 to 1000)
                           gray:FILE:ISO  the gray image FILE (any INPUT format, any scalar
                                          type, in the label image's physical space) where
-                                         brighter than ISO is inside
+                                         brighter than ISO (or equal) is inside
                           sphere:CX,CY,CZ,R
                                          the ball of centre CX,CY,CZ and radius R > 0 (mm)
                           none           no cut stage: the staircase mesh of the voxels

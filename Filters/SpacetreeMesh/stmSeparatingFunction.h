@@ -69,7 +69,10 @@ public:
 
   ///@{
   /**
-   * The gray value of the surface in GRAY_IMAGE mode. Default 0.
+   * The gray value of the surface in GRAY_IMAGE mode. Default 0. A voxel of exactly this value
+   * is inside: f is lowered by a millionth of the threshold's magnitude (at least 1e-6), so that
+   * a plateau of such voxels (an upsampled or a binary integer image) is no zero set of whole
+   * cells.
    */
   vtkSetMacro(Threshold, double);
   vtkGetMacro(Threshold, double);

@@ -7,7 +7,9 @@
  * stmSeparatingFunction samples it at the mesh points; stmVertexSnap projects snapped vertices
  * onto its zero set along the gradient. The gray image convention is the one of
  * stmSeparatingFunction: f = gray - threshold, negated when the inside is above the threshold,
- * the gray values (voxel values at the image points) interpolated trilinearly in the image's
+ * minus TieShift(threshold) so that a gray value equal to the threshold is inside, and so no
+ * plateau of such values is a zero set of whole cells; the gray values (voxel values at the
+ * image points) interpolated trilinearly in the image's
  * physical space. The image is closed at its boundary (stm::ClosedVoxelField): beyond it f is
  * the magnitude of the nearest voxel's, so the surface of an inside that reaches the boundary
  * lies on it. The image may be a sub-extent of a larger one (a piece's read): every value then
@@ -25,6 +27,8 @@
 
 #include "vtkSmartPointer.h"
 
+#include <algorithm>
+#include <cmath>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -43,6 +47,10 @@ public:
   /// image without scalars or without voxels.
   bool SetGrayImage(vtkImageData* image, const int* wholeExtent, double threshold,
     bool insideAboveThreshold, std::string& error);
+
+  /// How far f lies below the signed gray value: a millionth of the threshold's magnitude, at
+  /// least 1e-6 (far above the cut's default zero tolerance of 1e-9, far below a gray level).
+  static double TieShift(double threshold) { return 1e-6 * std::max(1.0, std::abs(threshold)); }
 
   /// f at a physical point.
   double Evaluate(const double x[3]) const;

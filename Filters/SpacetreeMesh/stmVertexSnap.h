@@ -152,7 +152,8 @@ public:
 
   ///@{
   /**
-   * The gray value of the surface in the gray image. Default 0.
+   * The gray value of the surface in the gray image. Default 0. A voxel of exactly this value is
+   * inside, as in stmSeparatingFunction.
    */
   vtkSetMacro(Threshold, double);
   vtkGetMacro(Threshold, double);

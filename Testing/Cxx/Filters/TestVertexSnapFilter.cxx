@@ -352,6 +352,73 @@ TEST(VertexSnapFilter, GrayImageProjection)
   EXPECT_GE(onSurface, snapped * 9 / 10) << onSurface << " of " << snapped;
 }
 
+// A gray image whose voxels come in blocks of 2 x 2 x 2 (as a nearest-neighbour upsampling of an
+// integer image makes them), with a shell of blocks at exactly the threshold between a bright
+// core and a dark outside. Those voxels count as inside, whichever side is inside: f is a
+// millionth of the threshold (6e-5) below zero on the shell's points, and no point within the
+// image has f = 0, where before 1,598 points did, whole cells of them. The snapped and cut mesh
+// is valid.
+TEST(VertexSnapFilter, GrayPlateauAtTheThresholdCountsAsInside)
+{
+  const int n = 24;
+  vtkNew<vtkImageData> gray;
+  gray->SetDimensions(n, n, n);
+  gray->SetSpacing(1.0 / n, 1.0 / n, 1.0 / n);
+  gray->SetOrigin(0.5 / n, 0.5 / n, 0.5 / n);
+  vtkNew<vtkDoubleArray> values;
+  values->SetNumberOfValues(n * n * n);
+  for (int k = 0, id = 0; k < n; ++k)
+  {
+    for (int j = 0; j < n; ++j)
+    {
+      for (int i = 0; i < n; ++i, ++id)
+      {
+        // Blocks of two voxels, centred at block 5.6 (0.1 off the blocks' symmetry).
+        const double x = i / 2 - 5.6, y = j / 2 - 5.5, z = k / 2 - 5.4;
+        const double r2 = x * x + y * y + z * z;
+        values->SetValue(id, r2 < 2.5 * 2.5 ? 100.0 : r2 < 4.5 * 4.5 ? 60.0 : 0.0);
+      }
+    }
+  }
+  gray->GetPointData()->SetScalars(values);
+  BallPipeline mesh(n, 0.3);
+  mesh.Snap->SetSnapRule(stmVertexSnap::QUALITY_DRIVEN);
+  mesh.Ball.Function->SetMode(stmSeparatingFunction::GRAY_IMAGE);
+  mesh.Ball.Function->SetInputDataObject(1, gray);
+  mesh.Ball.Function->SetThreshold(60.0);
+  mesh.Snap->SetProjection(stmVertexSnap::FUNCTION);
+  mesh.Snap->SetInputDataObject(1, gray);
+  mesh.Snap->SetThreshold(60.0);
+  // Inside below the threshold too (a dark body): equal values are inside.
+  vtkIdType plateau = 0;
+  for (const bool insideAbove : { false, true })
+  {
+    mesh.Ball.Function->SetInsideAboveThreshold(insideAbove);
+    mesh.Ball.Function->Update();
+    vtkDataArray* f =
+      mesh.Ball.Function->GetOutput()->GetPointData()->GetArray("SeparatingFunction");
+    vtkIdType zero = 0;
+    plateau = 0;
+    for (vtkIdType p = 0; p < f->GetNumberOfTuples(); ++p)
+    {
+      // The image's boundary is the surface of an inside that reaches it (dark: the outside).
+      double x[3];
+      mesh.Ball.Function->GetOutput()->GetPoint(p, x);
+      const bool within =
+        std::max({ std::abs(x[0] - 0.5), std::abs(x[1] - 0.5), std::abs(x[2] - 0.5) }) < 0.45;
+      zero += within && f->GetComponent(p, 0) == 0.0;
+      plateau += std::abs(f->GetComponent(p, 0) + 6e-5) <= 1e-15;
+    }
+    EXPECT_EQ(zero, 0);
+    EXPECT_EQ(plateau, 1598);
+  }
+  vtkUnstructuredGrid* cut = mesh.Mesh();
+  const stm::MeshInvariantReport report = stmTest::CheckMesh<3>(cut, Axes3, 1e-12);
+  EXPECT_TRUE(report.IsValid()) << report.Summary();
+  std::cout << "gray plateau at the threshold: " << plateau << " points on it, worst condition "
+            << stmTest::MeasureVerdictQuality(cut).WorstCondition << "\n";
+}
+
 // 2D: triangles in the XY plane, the default labels function.
 TEST(VertexSnapFilter, TwoDimensionalDisk)
 {
