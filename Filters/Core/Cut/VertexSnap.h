@@ -51,7 +51,8 @@
 // A piece of a distributed mesh (VertexSnapOptions::Exchange) decides as the whole mesh does:
 // after every round (and every round of revisits) it takes the states of the points it holds
 // from the pieces whose own cells have them (SnapExchange), so its ghost cells need only reach
-// as far as one round's decisions read (two rings of cells), not as far as their chains go.
+// as far as one round's decisions around its own points read (three rings of cells: the
+// neighbours' decisions, which read two rings further), not as far as their chains go.
 
 #include "../Check/SimplexQuality.h"
 #include "../Common/Determinant.h"
@@ -1158,15 +1159,13 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
   // Aborted.
   auto goOn = [&](bool work, Status& status)
   {
-    const bool abort = executor.ShouldAbort();
-    const double all = exchange ? exchange->Maximum(abort ? 2.0
-                                      : work              ? 1.0
-                                                          : 0.0)
-                                : (abort     ? 2.0
-                                      : work ? 1.0
-                                             : 0.0);
-    status = all > 1.0 ? Status::Aborted() : Status::Ok();
-    return all == 1.0;
+    double state = executor.ShouldAbort() ? 2.0 : work ? 1.0 : 0.0;
+    if (exchange)
+    {
+      state = exchange->Maximum(state);
+    }
+    status = state > 1.0 ? Status::Aborted() : Status::Ok();
+    return state == 1.0;
   };
 
   // Rounds of independent local minima.
