@@ -48,6 +48,14 @@ inline bool AllAgree(vtkMultiProcessController* controller, bool can)
   return all != 0;
 }
 
+/// The largest `value` of every rank of `controller` (collective).
+inline double AllMaximum(vtkMultiProcessController* controller, double value)
+{
+  double all = value;
+  controller->AllReduce(&value, &all, 1, vtkCommunicator::MAX_OP);
+  return all;
+}
+
 /// Per point of a piece: the smallest root colour of its cells, and 1 where another piece moves
 /// it (a cell of that colour is a ghost; the cells of one colour around a point lie in one root
 /// cell, so they are all ghosts or all own).
@@ -233,12 +241,7 @@ public:
 
   bool AllReady(bool ready) override { return AllAgree(this->Controller, ready); }
 
-  double Maximum(double value) override
-  {
-    double all = value;
-    this->Controller->AllReduce(&value, &all, 1, vtkCommunicator::MAX_OP);
-    return all;
-  }
+  double Maximum(double value) override { return AllMaximum(this->Controller, value); }
 
   std::vector<double> Gather(const std::vector<double>& values) override
   {

@@ -17,6 +17,7 @@
 #define stmSnapExchange_h
 
 #include "stmPieceBorder.h"
+#include "stmPieceExchange.h"
 
 #include "Cut/SnapExchange.h"
 
@@ -59,9 +60,7 @@ public:
 
   double Maximum(double value) override
   {
-    double all = value;
-    this->Controller->AllReduce(&value, &all, 1, vtkCommunicator::MAX_OP);
-    return all;
+    return stmPieceExchange::AllMaximum(this->Controller, value);
   }
 
   void List(const std::int64_t* points, std::int64_t count) override

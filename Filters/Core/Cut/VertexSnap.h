@@ -469,7 +469,14 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
   auto accepts = [everyEdge, alpha](double distance)
   { return everyEdge ? distance <= 0.5 : distance < alpha; };
 
-  // Point classes, as MarchingSimplices classes them.
+  // Point classes, as MarchingSimplices classes them (f - iso finite).
+  auto classOf = [iso, tolerance](double value)
+  {
+    const double difference = value - iso;
+    return static_cast<std::int8_t>(difference < -tolerance ? VertexClass::Negative
+        : difference > tolerance                            ? VertexClass::Positive
+                                                            : VertexClass::Zero);
+  };
   std::vector<std::int8_t> classes(static_cast<std::size_t>(numberOfPoints), 0);
   std::atomic<bool> invalid{ false };
   detail::SnapFor(executor, numberOfPoints, 1 << 16,
@@ -483,9 +490,7 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
           invalid.store(true, std::memory_order_relaxed);
           continue;
         }
-        classes[p] = static_cast<std::int8_t>(difference < -tolerance ? VertexClass::Negative
-            : difference > tolerance                                  ? VertexClass::Positive
-                                                                      : VertexClass::Zero);
+        classes[p] = classOf(values[p]);
       }
     });
   if (executor.ShouldAbort())
@@ -1096,10 +1101,7 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
       const std::int64_t p = activePoints[received[i]];
       std::copy(state, state + Dim, points + p * Dim);
       values[p] = state[Dim];
-      const double difference = values[p] - iso;
-      classes[p] = static_cast<std::int8_t>(difference < -tolerance ? VertexClass::Negative
-          : difference > tolerance                                  ? VertexClass::Positive
-                                                                    : VertexClass::Zero);
+      classes[p] = classOf(values[p]);
       const auto decision = static_cast<std::uint8_t>(state[Dim + 1]);
       record(p, decision);
       // Which edge another piece snapped along is not sent.
@@ -1373,10 +1375,7 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
       // From the first state (no other selected point reads v: they share no cell).
       std::copy(first, first + Dim, points + v * Dim);
       values[v] = firstValue;
-      const double difference = firstValue - iso;
-      classes[v] = static_cast<std::int8_t>(difference < -tolerance ? VertexClass::Negative
-          : difference > tolerance                                  ? VertexClass::Positive
-                                                                    : VertexClass::Zero);
+      classes[v] = classOf(firstValue);
       double best = worst[slot];
       const double cut = localWorst(v, first, firstValue, best);
       const bool backToCut = cut < best;
