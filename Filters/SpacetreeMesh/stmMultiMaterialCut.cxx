@@ -2,9 +2,12 @@
 #include "stmMultiMaterialCut.h"
 
 #include "stmCutInput.h"
+#include "stmPieceBorder.h"
+#include "stmPieceExchange.h"
 #include "stmPieces.h"
 #include "stmPlaneFrame.h"
 #include "stmSMPExecutor.h"
+#include "stmSnapExchange.h"
 
 #include "Cut/MultiMaterialCut.h"
 
@@ -29,6 +32,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <memory>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -69,6 +73,21 @@ std::vector<std::int64_t> PeelingOrder(vtkDataArray* labels, std::int64_t backgr
   return order;
 }
 
+/// The peeling order of every rank's labels together (collective), so that the pieces that
+/// exchange make the same steps.
+std::vector<std::int64_t> CommonPeelingOrder(vtkMultiProcessController* controller,
+  const std::vector<std::int64_t>& order, std::int64_t background)
+{
+  const std::vector<double> all =
+    stmPieceBorder::detail::AllGather(controller, std::vector<double>(order.begin(), order.end()));
+  std::vector<std::int64_t> common(all.begin(), all.end());
+  std::sort(common.begin(), common.end());
+  common.erase(std::unique(common.begin(), common.end()), common.end());
+  common.erase(std::find(common.begin(), common.end(), background));
+  common.push_back(background);
+  return common;
+}
+
 struct CutResult
 {
   int Materials = 0;
@@ -76,6 +95,7 @@ struct CutResult
   vtkIdType SplitAssignedCells = 0;
   vtkIdType CutPoints = 0;
   vtkIdType SnappedPoints = 0;
+  bool CutRan = false; // the core's Run was called (it takes part in the exchanges itself)
 };
 
 template <int Dim, class IdType>
@@ -132,6 +152,7 @@ stm::Status Cut(stmMultiMaterialCut* filter, vtkUnstructuredGrid* input, const I
   const std::vector<stm::ExactSum> inputVolumes = stm::VolumePerMaterial<Dim>(core.data(),
     connectivity, numberOfCells, materials.data(), count, stmPieces::GhostCellFlags(input));
   stm::MultiMaterialCut<Dim> cut;
+  result.CutRan = true;
   status = cut.Run(numberOfPoints, options.SnapVertices ? core.data() : nullptr, connectivity,
     numberOfCells, materials.data(), count, std::move(fractions), options, executor);
   std::vector<double>().swap(core);
@@ -290,8 +311,37 @@ int stmMultiMaterialCut::RequestData(
   this->NumberOfCutPoints = 0;
   this->NumberOfSnappedPoints = 0;
   output->Initialize();
+  // Pieces on the ranks of an MPI run snap as the whole mesh does (stmStepSnapExchanges), if
+  // every rank has a piece with ghost cells: every rank agrees once (`agree`), those that stop
+  // before with false. After the agreement and until the core's Run takes part in the exchanges
+  // itself, a rank that stops tells the others at their first agreement (`stopExchanging`).
+  vtkMultiProcessController* controller =
+    stmPieces::ControllerOfPieces(outputVector->GetInformationObject(0));
+  std::unique_ptr<stmStepSnapExchanges> exchanges;
+  bool agreed = controller == nullptr;
+  auto agree = [&](bool can, int dimension)
+  {
+    if (!agreed)
+    {
+      agreed = true;
+      if (stmPieceExchange::AllAgree(controller, can))
+      {
+        exchanges = std::make_unique<stmStepSnapExchanges>(controller, dimension);
+      }
+    }
+  };
+  auto stopExchanging = [&](bool aborted)
+  {
+    if (exchanges)
+    {
+      exchanges->Maximum(aborted ? 1.0 : 2.0);
+      exchanges.reset();
+    }
+  };
   auto fail = [&](const std::string& message)
   {
+    agree(false, 0);
+    stopExchanging(false);
     output->Initialize();
     vtkErrorMacro(<< "MultiMaterialCut failed: " << message);
     return 0;
@@ -301,6 +351,7 @@ int stmMultiMaterialCut::RequestData(
     stmCutInput::Preflight(inputVector[0], input, stmCutInput::TessellateSimplicialFirst, problem);
   if (dimension < 0)
   {
+    agree(false, 0);
     return 1; // an upstream filter was aborted: an empty output, quietly
   }
   if (dimension == 0)
@@ -322,11 +373,13 @@ int stmMultiMaterialCut::RequestData(
   // first progress event (the GUI's) is honoured before and after it, not only in the cut.
   if (this->GetAbortExecute())
   {
+    agree(false, 0);
     return 1;
   }
-  const std::vector<std::int64_t> order = PeelingOrder(materialArray, this->BackgroundMaterial);
+  std::vector<std::int64_t> order = PeelingOrder(materialArray, this->BackgroundMaterial);
   if (this->GetAbortExecute())
   {
+    agree(false, 0);
     return 1;
   }
   if (order.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
@@ -339,9 +392,20 @@ int stmMultiMaterialCut::RequestData(
   {
     return fail(problem);
   }
+  const unsigned char* ghosts = stmPieces::GhostCellFlags(input);
+  const vtkIdType numberOfCells = input->GetNumberOfCells();
+  agree(this->VertexSnapping && ghosts &&
+      std::any_of(ghosts, ghosts + numberOfCells, [](unsigned char g) { return g != 0; }),
+    dimension);
+  if (exchanges)
+  {
+    order = CommonPeelingOrder(controller, order, this->BackgroundMaterial);
+  }
   stm::MultiMaterialCutOptions options;
   options.ZeroTolerance = this->ZeroTolerance;
   options.SnapVertices = this->VertexSnapping;
+  options.GhostCells = exchanges ? ghosts : nullptr;
+  options.Exchanges = exchanges.get();
   this->UpdateProgress(0.02);
 
   CutResult result;
@@ -351,11 +415,16 @@ int stmMultiMaterialCut::RequestData(
       return Cut<decltype(dim)::value>(
         this, input, ids, materialArray, order, frame, options, output, result);
     });
+  if (result.CutRan)
+  {
+    exchanges.reset();
+  }
   if (!status.IsOk())
   {
     output->Initialize();
     if (this->GetAbortExecute() || status.GetCode() == stm::Status::Code::Aborted)
     {
+      stopExchanging(true);
       return 1;
     }
     return fail(status.GetMessage());

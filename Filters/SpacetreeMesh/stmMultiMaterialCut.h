@@ -31,7 +31,11 @@
  *
  * A piece of a larger image (stmImageToSpacetree::SplitIntoPieces): the output keeps of the
  * piece's ghost cells the rings its request asks for (ghost levels), and at least the cells that
- * share a point with the piece's own cells, which is all that stmBoundarySmooth needs.
+ * share a point with the piece's own cells, which is all that stmBoundarySmooth needs. When
+ * every rank of an MPI run asks for its own piece and has ghost cells, the snaps of the steps
+ * whose materials lie near a piece's border exchange the points' states with the other ranks
+ * after every round, so the owned cells are the whole mesh's cut; then every rank must execute
+ * the filter, as with VTK's other parallel filters.
  *
  * @sa stmMarchingSimplices stmSpacetreeTessellate stmBoundarySmooth stmInterfaceSurface
  */

@@ -25,7 +25,9 @@
 #include "vtkMultiProcessController.h"
 #include "vtkPoints.h"
 
+#include <algorithm>
 #include <cstdint>
+#include <memory>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -38,6 +40,15 @@ public:
     vtkMultiProcessController* controller, vtkPoints* keys, std::vector<std::uint8_t> ownPoints)
     : Controller(controller)
     , Keys(keys)
+    , OwnPoints(std::move(ownPoints))
+  {
+  }
+
+  /// keys: three coordinates per point, its position before the snap.
+  stmSnapExchange(vtkMultiProcessController* controller, std::vector<double> keys,
+    std::vector<std::uint8_t> ownPoints)
+    : Controller(controller)
+    , KeyCoordinates(std::move(keys))
     , OwnPoints(std::move(ownPoints))
   {
   }
@@ -69,7 +80,15 @@ public:
     auto keyOf = [this](std::int64_t p)
     {
       Key key;
-      this->Keys->GetPoint(p, key.data());
+      if (this->Keys)
+      {
+        this->Keys->GetPoint(p, key.data());
+      }
+      else
+      {
+        std::copy(
+          this->KeyCoordinates.data() + 3 * p, this->KeyCoordinates.data() + 3 * p + 3, key.data());
+      }
       return key;
     };
     // Every piece's held points, by name.
@@ -136,6 +155,12 @@ public:
     }
   }
 
+  bool IsIdle() const override
+  {
+    return std::all_of(
+      this->SentCounts.begin(), this->SentCounts.end(), [](long long n) { return n == 0; });
+  }
+
   const std::vector<std::int64_t>& GetSent() const override { return this->Sent; }
   const std::vector<std::int64_t>& GetReceived() const override { return this->Received; }
 
@@ -170,7 +195,8 @@ public:
 
 private:
   vtkMultiProcessController* Controller;
-  vtkPoints* Keys;
+  vtkPoints* Keys = nullptr;
+  std::vector<double> KeyCoordinates; // without Keys
   std::vector<std::uint8_t> OwnPoints;
   std::vector<std::int64_t> Sent;
   std::vector<long long> SentCounts; // per rank
@@ -178,6 +204,49 @@ private:
   std::vector<std::int64_t> ReceivedFrom; // index among all ranks' sent points, in rank order
   std::vector<double> All;
   std::int64_t Unmatched = 0;
+};
+
+/// The snap exchanges of stmMultiMaterialCut's steps (stm::StepSnapExchanges): a
+/// stmSnapExchange per step, its points named by their places before the step's snap.
+class stmStepSnapExchanges : public stm::StepSnapExchanges
+{
+public:
+  stmStepSnapExchanges(vtkMultiProcessController* controller, int dimension)
+    : Controller(controller)
+    , Dimension(dimension)
+  {
+  }
+
+  double Maximum(double value) override
+  {
+    return stmPieceExchange::AllMaximum(this->Controller, value);
+  }
+
+  void AnyPiece(std::vector<std::uint8_t>& flags) override
+  {
+    const std::vector<std::uint8_t> mine = flags;
+    this->Controller->AllReduce(
+      mine.data(), flags.data(), static_cast<vtkIdType>(flags.size()), vtkCommunicator::MAX_OP);
+  }
+
+  stm::SnapExchange& ForStep(
+    const double* places, const std::uint8_t* ownPoints, std::int64_t count) override
+  {
+    std::vector<double> keys(static_cast<std::size_t>(3 * count), 0.0);
+    for (std::int64_t p = 0; p < count; ++p)
+    {
+      std::copy(
+        places + p * this->Dimension, places + (p + 1) * this->Dimension, keys.data() + 3 * p);
+    }
+    this->Step = std::make_unique<stmSnapExchange>(
+      this->Controller, std::move(keys), std::vector<std::uint8_t>(ownPoints, ownPoints + count));
+    return *this->Step;
+  }
+
+private:
+  vtkMultiProcessController* Controller;
+  int Dimension;
+  std::unique_ptr<stmSnapExchange> Step;
 };
 
 #endif

@@ -12,7 +12,8 @@ improvement moves points; with noise at the centre, where the serial run splits 
 MultiMaterialCut), a ball cut, snapped and smoothed onto an ellipsoid (vtkQuadric: the snap's
 projections within each point's cells, the smoothing's with the whole mesh's mean edge), and a
 2D image to MarchingSimplices. And an abort on rank 1 halfway through the exchanged smoothing,
-or in the exchanged snap before and during its rounds, stops every rank.
+in the exchanged snap before and during its rounds, or in MultiMaterialCut before and during
+its steps' exchanged snaps, stops every rank.
 """
 import os
 
@@ -202,3 +203,28 @@ for at in (0.5, 0.7):
     if rank == 0:
         print("abort on rank 1 at %g of the exchanged snap: every rank stopped" % at)
 
+# An abort on rank 1 in MultiMaterialCut, before its steps (progress 0.1, where no snap has
+# begun) and during them (0.5): every rank stops at the next agreement of the steps' snaps (or
+# at the cut's last one), none waits for the others, and no rank reports an error.
+for at in (0.1, 0.5):
+    stages = chain(T.make_image(noisy), "materials")
+    cut = [stage for stage in stages if stage.IsA("stmMultiMaterialCut")][0]
+    stopped = []
+
+    def abort_cut(caller, event):
+        if rank == 1 and caller.GetProgress() >= at and not stopped:
+            stopped.append(caller.GetProgress())
+            caller.SetAbortExecute(1)
+
+    cut.AddObserver("ProgressEvent", abort_cut)
+    errors = [T.ErrorCollector(stage) for stage in stages[1:]]
+    T.check(stages[-1].UpdatePiece(rank, ranks, 0) == 1, "cut abort: rank %d failed" % rank)
+    T.check(not any(e.errors for e in errors), "cut abort at %g: rank %d: %r" % (
+        at, rank, [e.errors for e in errors]))
+    T.check(rank != 1 or stopped, "cut abort: rank 1 never reached %g of the cut" % at)
+    T.check(cut.GetOutput().GetNumberOfCells() == 0,
+            "cut abort at %g: rank %d kept %d cells" % (at, rank,
+                                                        cut.GetOutput().GetNumberOfCells()))
+    controller.Barrier()
+    if rank == 0:
+        print("abort on rank 1 at %g of the exchanged multi-material cut: every rank stopped" % at)

@@ -49,8 +49,9 @@ def chain(mode, root, split=True):
 
 
 # Root cells of 4 voxels: the pieces keep 4 inner layers of ghost root cells and the outer one
-# (stm::GhostRootLayersFor);
-# with one, MultiMaterialCut's snapping decided other points than the whole mesh's.
+# (stm::GhostRootLayersFor). With one, MultiMaterialCut's snapping decided other points than
+# the whole mesh's before its steps' snaps exchanged; with the exchange, one layer gave the
+# serial mesh too (4 ranks, an experiment).
 cases = [(spacetreemesh.stmImageToSpacetree.THIN_BODY_PARTS, "body", 0),
          (spacetreemesh.stmImageToSpacetree.THIN_MATERIAL_PARTS, "materials", 0),
          (spacetreemesh.stmImageToSpacetree.THIN_MATERIAL_PARTS, "materials, root cells of 4", 4)]

@@ -371,6 +371,12 @@ struct MultiMaterialCutOptions
   /// Compute consecutive steps whose points are disjoint side by side (Run): the same result
   /// as one step at a time, which false gives (for comparison).
   bool StepsSideBySide = true;
+  /// A piece of a distributed mesh: per input cell, nonzero for a ghost cell (one that another
+  /// piece owns), and the exchanges with the other pieces. With both (and SnapVertices), the
+  /// snaps decide the points of the piece's own cells as the whole mesh's cut does, one step at
+  /// a time; every piece makes every step, with or without cells.
+  const std::uint8_t* GhostCells = nullptr;
+  StepSnapExchanges* Exchanges = nullptr;
 
   static VertexSnapOptions QualityDrivenSnap()
   {
@@ -584,6 +590,19 @@ private:
   /// Applies a computed step to the shared state: moved points, added points and pieces.
   void CommitStep(StepWork& work);
 
+  /// Run's work, without the pieces' closing agreement.
+  template <class IdType, class Executor>
+  Status RunSteps(std::int64_t numberOfPoints, const double* points, const IdType* connectivity,
+    std::int64_t numberOfCells, const std::int32_t* materials, int numberOfMaterials,
+    MaterialFractions fractions, const MultiMaterialCutOptions& options, Executor& executor);
+
+  /// The other end of the edge along which another piece snapped each of `moved` (local ids, of
+  /// a step's points): the neighbour in the direction the point moved, from its place before
+  /// the step (Points) to `after` (Dim coordinates per local point); -1 for a point that did
+  /// not move.
+  std::vector<std::int64_t> SnapPartners(
+    const StepWork& work, const std::vector<std::int64_t>& moved, const double* after) const;
+
   std::int64_t NumberOfInputPoints = 0;
   std::int32_t NumberOfMaterials = 0;
   const std::int32_t* InputMaterials = nullptr; // during Run
@@ -601,12 +620,60 @@ private:
   std::vector<std::int64_t> LocalIds;            // per point: id in its step, or -1
   std::vector<std::int32_t> Claims;              // per point: Batch's scratch
   std::int32_t ClaimRound = 0;
+  StepSnapExchanges* Exchanges = nullptr; // during Run, for a piece that exchanges
+  const std::uint8_t* GhostCells = nullptr;
+  std::vector<std::uint8_t> ExchangedSteps; // per material: its step's snap exchanges
+  bool StoppedTogether = false;             // a snap stopped every piece at once
+
   MultiMaterialCutCounts Counts;
+
+  /// Rings of input cells on either side of a piece's border within which a step's material
+  /// makes its snap exchange (BorderMaterials).
+  static constexpr int BorderRings = 4;
+  /// Per material, 1 where it is carried by a point of a cell within BorderRings rings of the
+  /// border between the piece's own cells and its ghost cells.
+  std::vector<std::uint8_t> BorderMaterials() const;
+  /// The status of a piece that another stopped, from the pieces' agreement (1: aborted,
+  /// 2: failed).
+  static Status StoppedByAnother(double stopped)
+  {
+    return stopped > 1.0 ? Status::Invalid("another piece of the mesh could not be cut")
+                         : Status::Aborted();
+  }
 };
 
 template <int Dim>
 template <class IdType, class Executor>
 Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const double* points,
+  const IdType* connectivity, std::int64_t numberOfCells, const std::int32_t* materials,
+  int numberOfMaterials, MaterialFractions fractions, const MultiMaterialCutOptions& options,
+  Executor& executor)
+{
+  this->Exchanges = options.SnapVertices && options.GhostCells ? options.Exchanges : nullptr;
+  this->GhostCells = options.GhostCells;
+  this->StoppedTogether = false;
+  Status status = this->RunSteps(numberOfPoints, points, connectivity, numberOfCells, materials,
+    numberOfMaterials, std::move(fractions), options, executor);
+  // The pieces' last agreement: a piece that stopped outside a snap says so here, or at the
+  // agreement before the rounds of the snap the others are in, so no piece waits for it.
+  if (this->Exchanges && !this->StoppedTogether)
+  {
+    const bool aborted =
+      status.GetCode() == Status::Code::Aborted || (status.IsOk() && executor.ShouldAbort());
+    const double stopped = this->Exchanges->Maximum(aborted ? 1.0 : status.IsOk() ? 0.0 : 2.0);
+    if (status.IsOk() && stopped > 0.0)
+    {
+      status = StoppedByAnother(stopped);
+    }
+  }
+  this->Exchanges = nullptr;
+  this->GhostCells = nullptr;
+  return status;
+}
+
+template <int Dim>
+template <class IdType, class Executor>
+Status MultiMaterialCut<Dim>::RunSteps(std::int64_t numberOfPoints, const double* points,
   const IdType* connectivity, std::int64_t numberOfCells, const std::int32_t* materials,
   int numberOfMaterials, MaterialFractions fractions, const MultiMaterialCutOptions& options,
   Executor& executor)
@@ -768,6 +835,22 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const double* poi
       }
     }
   }
+  // A piece of a distributed mesh: the pieces agree to start (one may have stopped before),
+  // and which steps' snaps exchange. Only a step whose material lies near a piece's border can
+  // make a decision that reads another piece's points, so the others run with no exchange and
+  // no agreement: each piece goes its own way through them.
+  this->ExchangedSteps.assign(static_cast<std::size_t>(numberOfMaterials), 0);
+  if (this->Exchanges)
+  {
+    const double stopped = this->Exchanges->Maximum(executor.ShouldAbort() ? 1.0 : 0.0);
+    if (stopped > 0.0)
+    {
+      this->StoppedTogether = true;
+      return StoppedByAnother(stopped);
+    }
+    this->ExchangedSteps = this->BorderMaterials();
+    this->Exchanges->AnyPiece(this->ExchangedSteps);
+  }
   // Batches of steps with disjoint points (Batch) run side by side: a step with more than two
   // thirds of a batch's cells runs first, alone, with the threads in its loops; the others run
   // one per thread (their loops then run on that thread). Each step is computed from the state
@@ -780,8 +863,10 @@ Status MultiMaterialCut<Dim>::Run(std::int64_t numberOfPoints, const double* poi
     {
       return Status::Aborted();
     }
-    const std::vector<std::int32_t> batch =
-      options.StepsSideBySide ? this->Batch(first) : std::vector<std::int32_t>{ first };
+    // The pieces of a distributed mesh exchange inside the snaps of some steps, in step order.
+    const std::vector<std::int32_t> batch = options.StepsSideBySide && !this->Exchanges
+      ? this->Batch(first)
+      : std::vector<std::int32_t>{ first };
     works.assign(batch.size(), StepWork());
     std::int64_t total = 0;
     for (std::size_t i = 0; i < batch.size(); ++i)
@@ -901,7 +986,10 @@ Status MultiMaterialCut<Dim>::ComputeStep(StepWork& work, Executor& executor)
   cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
   if (cells.empty())
   {
-    return Status::Ok();
+    // A piece without cells of the step still takes part in its snap's exchanges.
+    std::vector<double> none;
+    return this->Exchanges && this->ExchangedSteps[work.Step] ? this->SnapStep(work, none, executor)
+                                                              : Status::Ok();
   }
   const std::int32_t step = work.Step;
   const auto count = static_cast<std::int64_t>(cells.size());
@@ -1181,34 +1269,183 @@ Status MultiMaterialCut<Dim>::SnapStep(
   const std::vector<double> before = values;
   VertexSnapOptions options = this->SnapOptions;
   options.Movable = movable.data();
+  const auto numberOfCells = static_cast<std::int64_t>(work.Local.size()) / (Dim + 1);
+  // A piece's own points: those on its own cells among the step's (each lies on some piece's).
+  std::vector<std::uint8_t> own;
+  const bool exchanged = this->Exchanges && this->ExchangedSteps[step];
+  if (exchanged)
+  {
+    own.assign(static_cast<std::size_t>(count), 0);
+    for (std::int64_t c = 0; c < numberOfCells; ++c)
+    {
+      for (int v = 0; v <= Dim && !this->GhostCells[this->CellParents[work.Cells[c]]]; ++v)
+      {
+        own[work.Local[c * (Dim + 1) + v]] = 1;
+      }
+    }
+    options.Exchange = &this->Exchanges->ForStep(coordinates.data(), own.data(), count);
+  }
   QuietExecutor<Executor> quiet{ &executor };
   VertexSnap<Dim> snap;
-  const Status status = snap.Snap(coordinates.data(), values.data(), count, work.Local.data(),
-    static_cast<std::int64_t>(work.Local.size()) / (Dim + 1), options, quiet);
+  const Status status = snap.Snap(
+    coordinates.data(), values.data(), count, work.Local.data(), numberOfCells, options, quiet);
   if (!status.IsOk())
   {
+    // An exchanging snap stops every piece at the same agreement.
+    this->StoppedTogether = snap.GetStopsAgreed();
     return status;
   }
   work.Snapped = snap.GetCounts().Snapped;
   // A moved point takes the fractions of the place it moved to on its edge, from the rows as
   // they were before any of this step's moves.
   work.Moved = snap.GetMovedFlags();
-  const std::vector<std::int64_t>& edges = snap.GetSnapEdges();
+  std::vector<std::int64_t> edges = snap.GetSnapEdges();
+  if (exchanged)
+  {
+    // Which edge another piece snapped along is not sent: the direction of the move tells.
+    std::vector<std::int64_t> received;
+    for (std::int64_t p = 0; p < count; ++p)
+    {
+      if (work.Moved[p] && edges[p] < 0)
+      {
+        received.push_back(p);
+      }
+    }
+    const std::vector<std::int64_t> partners =
+      this->SnapPartners(work, received, coordinates.data());
+    for (std::size_t i = 0; i < received.size(); ++i)
+    {
+      edges[received[i]] = partners[i];
+    }
+  }
   for (std::int64_t p = 0; p < count; ++p)
   {
     if (!work.Moved[p])
     {
       continue;
     }
-    const std::int64_t w = edges[p];
+    const std::int64_t w = edges[p] >= 0 ? edges[p] : p;
     const double other = work.Moved[w] ? before[w] : values[w];
-    const double t = std::min(1.0, std::max(0.0, before[p] / (before[p] - other)));
+    const double t = w == p ? 0.0 : std::min(1.0, std::max(0.0, before[p] / (before[p] - other)));
     work.MovedFractions.AppendInterpolated(this->Fractions, points[p], points[w], t);
     work.MovedPoints.push_back(p);
     work.MovedPlaces.insert(
       work.MovedPlaces.end(), coordinates.data() + p * Dim, coordinates.data() + (p + 1) * Dim);
   }
   return Status::Ok();
+}
+
+template <int Dim>
+std::vector<std::uint8_t> MultiMaterialCut<Dim>::BorderMaterials() const
+{
+  // A decision for an own point reads three rings of cells (VertexSnap), and a point whose
+  // state changes is the end of a cut edge, so it or its neighbour carries the material. The
+  // cut only splits cells and moves points within their cells' stars, so rings of input cells
+  // bound those of the cut's cells, and a piece's rings on the ghost side, or-ed over the
+  // pieces, are the other pieces' on the own side.
+  const auto numberOfCells = static_cast<std::int64_t>(this->CellParents.size());
+  const std::int64_t numberOfPoints = this->GetNumberOfPoints();
+  std::vector<std::uint8_t> onOwn(static_cast<std::size_t>(numberOfPoints), 0),
+    reached(onOwn.size(), 0);
+  for (std::int64_t c = 0; c < numberOfCells; ++c)
+  {
+    for (int v = 0; v <= Dim && !this->GhostCells[c]; ++v)
+    {
+      onOwn[this->Cells[c * (Dim + 1) + v]] = 1;
+    }
+  }
+  for (std::int64_t c = 0; c < numberOfCells; ++c)
+  {
+    for (int v = 0; v <= Dim && this->GhostCells[c]; ++v)
+    {
+      const std::int64_t p = this->Cells[c * (Dim + 1) + v];
+      reached[p] = onOwn[p];
+    }
+  }
+  std::vector<std::uint8_t> next;
+  for (int ring = 0; ring < BorderRings; ++ring)
+  {
+    next = reached;
+    for (std::int64_t c = 0; c < numberOfCells; ++c)
+    {
+      const std::int64_t* ids = this->Cells.data() + c * (Dim + 1);
+      bool touches = false;
+      for (int v = 0; v <= Dim; ++v)
+      {
+        touches = touches || reached[ids[v]] != 0;
+      }
+      for (int v = 0; v <= Dim && touches; ++v)
+      {
+        next[ids[v]] = 1;
+      }
+    }
+    reached.swap(next);
+  }
+  std::vector<std::uint8_t> materials(static_cast<std::size_t>(this->NumberOfMaterials), 0);
+  for (std::int64_t p = 0; p < numberOfPoints; ++p)
+  {
+    for (std::int64_t e = this->Fractions.Begins[p]; e < this->Fractions.Ends[p] && reached[p]; ++e)
+    {
+      materials[this->Fractions.Materials[e]] |= this->Fractions.Values[e] > 0.0 ? 1 : 0;
+    }
+  }
+  return materials;
+}
+
+template <int Dim>
+std::vector<std::int64_t> MultiMaterialCut<Dim>::SnapPartners(
+  const StepWork& work, const std::vector<std::int64_t>& moved, const double* after) const
+{
+  std::vector<std::int64_t> partners(moved.size(), -1);
+  if (moved.empty())
+  {
+    return partners;
+  }
+  std::vector<std::int64_t> slot(work.Points.size(), -1);
+  for (std::size_t i = 0; i < moved.size(); ++i)
+  {
+    slot[moved[i]] = static_cast<std::int64_t>(i);
+  }
+  // The edge a point moved along points where it moved to: of its neighbours, the one with the
+  // largest cosine between the two directions (1 but for rounding; other edges are well apart).
+  std::vector<double> best(moved.size(), -2.0);
+  const auto numberOfCells = static_cast<std::int64_t>(work.Local.size()) / (Dim + 1);
+  for (std::int64_t c = 0; c < numberOfCells; ++c)
+  {
+    const std::int64_t* ids = work.Local.data() + c * (Dim + 1);
+    for (int v = 0; v <= Dim; ++v)
+    {
+      const std::int64_t i = slot[ids[v]];
+      if (i < 0)
+      {
+        continue;
+      }
+      const double* from = this->Points.data() + work.Points[ids[v]] * Dim;
+      double step[Dim], stepLength = 0.0;
+      for (int k = 0; k < Dim; ++k)
+      {
+        step[k] = after[ids[v] * Dim + k] - from[k];
+        stepLength += step[k] * step[k];
+      }
+      for (int w = 0; w <= Dim; ++w)
+      {
+        const double* to = this->Points.data() + work.Points[ids[w]] * Dim;
+        double dot = 0.0, edgeLength = 0.0;
+        for (int k = 0; k < Dim; ++k)
+        {
+          dot += step[k] * (to[k] - from[k]);
+          edgeLength += (to[k] - from[k]) * (to[k] - from[k]);
+        }
+        const double cosine = w == v ? -2.0 : dot / std::sqrt(stepLength * edgeLength);
+        if (cosine > best[i])
+        {
+          best[i] = cosine;
+          partners[i] = ids[w];
+        }
+      }
+    }
+  }
+  return partners;
 }
 
 } // namespace stm

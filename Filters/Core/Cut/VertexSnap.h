@@ -198,6 +198,10 @@ public:
   /// Per moved point: the other end of the edge it snapped along (from its first place); -1
   /// where it did not move, and where a piece took the point's state from another piece.
   const std::vector<std::int64_t>& GetSnapEdges() const { return this->SnapEdges; }
+  /// Whether every piece of a distributed mesh stopped with this one when the last Snap
+  /// failed or was aborted: true when it exchanged to its end; false without an exchange, or
+  /// when it dropped an idle one (SnapExchange::IsIdle), whose pieces stop alone.
+  bool GetStopsAgreed() const { return this->StopsAgreed; }
   const VertexSnapCounts& GetCounts() const { return this->Counts; }
 
 private:
@@ -265,6 +269,7 @@ private:
   std::vector<std::uint8_t> Refused;
   std::vector<std::uint8_t> Nudged;
   std::vector<std::int64_t> SnapEdges;
+  bool StopsAgreed = false;
   VertexSnapCounts Counts;
 };
 
@@ -432,7 +437,9 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
 {
   // A piece that stops before the rounds tells the others, which would wait for it otherwise
   // (1: aborted, 2: failed; the agreement before the rounds).
-  SnapExchange* const exchange = options.Exchange;
+  // Dropped after the lists when no piece sends anything (SnapExchange::IsIdle).
+  SnapExchange* exchange = options.Exchange;
+  this->StopsAgreed = exchange != nullptr;
   auto stopBeforeRounds = [exchange](Status status)
   {
     if (exchange)
@@ -1155,7 +1162,17 @@ Status VertexSnap<Dim>::Snap(double* points, double* values, std::int64_t number
                            : Status::Aborted();
     }
     exchange->List(activePoints.data(), static_cast<std::int64_t>(activePoints.size()));
-    shareCandidates();
+    if (exchange->IsIdle())
+    {
+      // No agreements either: each piece goes its own way, and one that stops tells the others
+      // at their next agreement after this snap (the caller's).
+      exchange = nullptr;
+      this->StopsAgreed = false;
+    }
+    else
+    {
+      shareCandidates();
+    }
   }
   // Whether to go on with another round (every piece alike, while any piece has work), or
   // Aborted.

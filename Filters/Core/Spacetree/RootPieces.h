@@ -39,10 +39,12 @@ namespace stm
 constexpr int GhostRootLayers = 2;
 
 /// The voxels of ghost cells a piece's mesh keeps beyond its box, at least: the cuts' snapping
-/// decides a point from its neighbours' decisions, in rounds, and the whole mesh's decisions
-/// reach a piece's own points only through the cells the piece has. With one kept layer of root
-/// cells of 4 or 6 voxels, stmMultiMaterialCut's pieces of the nested ellipsoids (3 and 4 pieces)
-/// snapped other points than the whole mesh; with 8 voxels and more they did not. The default
+/// decides a point from its neighbours' decisions, in rounds, and without an exchange between
+/// the pieces the whole mesh's decisions reach a piece's own points only through the cells the
+/// piece has. With one kept layer of root cells of 4 or 6 voxels, stmMultiMaterialCut's pieces
+/// of the nested ellipsoids (3 and 4 pieces) snapped other points than the whole mesh; with 8
+/// voxels and more they did not. The snaps now exchange (three rings suffice then), but pieces
+/// that cannot exchange (a rank without ghost cells) still rely on this margin. The default
 /// root cells (16 voxels) keep one layer, as before.
 constexpr std::int64_t MinimumKeptGhostVoxels = 16;
 

@@ -5,6 +5,7 @@
 // cell, a valid mesh, fewer cut cells, thread independence, quality-driven never worse).
 
 #include "CoreTestUtilities.h"
+#include "MemoryPieces.h"
 
 #include "Check/MeshInvariants.h"
 #include "Check/SimplexQuality.h"
@@ -17,10 +18,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <condition_variable>
 #include <cstring>
 #include <map>
-#include <mutex>
 #include <random>
 #include <set>
 #include <thread>
@@ -675,140 +674,6 @@ TYPED_TEST(VertexSnapMeshTest, QualityDrivenKeepsTheBallWithinTheRevisitThreshol
 // exchange in memory: every piece cuts out its own cells (by the cells' centres along x) and
 // three rings of ghost cells around them, and names points by their ids in the whole mesh.
 
-/// Where the pieces' exchanges meet: each call waits for every piece.
-class PieceHub
-{
-public:
-  explicit PieceHub(int pieces)
-    : Posted(static_cast<std::size_t>(pieces))
-  {
-  }
-  /// Every piece's `values`, in the pieces' order.
-  std::vector<std::vector<double>> AllGather(int piece, std::vector<double> values)
-  {
-    this->Posted[piece] = std::move(values);
-    this->Wait();
-    std::vector<std::vector<double>> all = this->Posted;
-    this->Wait(); // no piece posts again before every piece has read
-    return all;
-  }
-
-private:
-  void Wait()
-  {
-    std::unique_lock<std::mutex> lock(this->Mutex);
-    const std::int64_t generation = this->Generation;
-    if (++this->Arrived == static_cast<int>(this->Posted.size()))
-    {
-      this->Arrived = 0;
-      ++this->Generation;
-      this->Arrival.notify_all();
-      return;
-    }
-    this->Arrival.wait(lock, [&] { return this->Generation != generation; });
-  }
-  std::vector<std::vector<double>> Posted;
-  std::mutex Mutex;
-  std::condition_variable Arrival;
-  int Arrived = 0;
-  std::int64_t Generation = 0;
-};
-
-class MemoryExchange : public stm::SnapExchange
-{
-public:
-  MemoryExchange(PieceHub& hub, int piece, const std::vector<std::int64_t>& globalIds,
-    const std::vector<std::uint8_t>& ownPoints)
-    : Hub(hub)
-    , Piece(piece)
-    , GlobalIds(globalIds)
-    , OwnPoints(ownPoints)
-  {
-  }
-  double Maximum(double value) override
-  {
-    double all = value;
-    for (const std::vector<double>& posted : this->Hub.AllGather(this->Piece, { value }))
-    {
-      all = std::max(all, posted[0]);
-    }
-    return all;
-  }
-  void List(const std::int64_t* points, std::int64_t count) override
-  {
-    std::vector<double> held;
-    std::vector<std::int64_t> heldIndices;
-    for (std::int64_t i = 0; i < count; ++i)
-    {
-      if (!this->OwnPoints[points[i]])
-      {
-        held.push_back(static_cast<double>(this->GlobalIds[points[i]]));
-        heldIndices.push_back(i);
-      }
-    }
-    std::set<double> wanted;
-    for (const std::vector<double>& posted : this->Hub.AllGather(this->Piece, held))
-    {
-      wanted.insert(posted.begin(), posted.end());
-    }
-    this->Sent.clear();
-    std::vector<double> sentIds;
-    for (std::int64_t i = 0; i < count; ++i)
-    {
-      const auto id = static_cast<double>(this->GlobalIds[points[i]]);
-      if (this->OwnPoints[points[i]] && wanted.count(id))
-      {
-        this->Sent.push_back(i);
-        sentIds.push_back(id);
-      }
-    }
-    std::map<double, std::pair<std::size_t, std::size_t>> senders;
-    const std::vector<std::vector<double>> allSent = this->Hub.AllGather(this->Piece, sentIds);
-    for (std::size_t piece = 0; piece < allSent.size(); ++piece)
-    {
-      for (std::size_t j = 0; j < allSent[piece].size(); ++j)
-      {
-        senders.emplace(allSent[piece][j], std::make_pair(piece, j));
-      }
-    }
-    this->Received.clear();
-    this->From.clear();
-    this->Unmatched = 0;
-    for (std::size_t j = 0; j < held.size(); ++j)
-    {
-      const auto found = senders.find(held[j]);
-      if (found == senders.end())
-      {
-        ++this->Unmatched;
-        continue;
-      }
-      this->Received.push_back(heldIndices[j]);
-      this->From.push_back(found->second);
-    }
-  }
-  const std::vector<std::int64_t>& GetSent() const override { return this->Sent; }
-  const std::vector<std::int64_t>& GetReceived() const override { return this->Received; }
-  void Share(const std::vector<double>& sent, int width, std::vector<double>& received) override
-  {
-    const std::vector<std::vector<double>> all = this->Hub.AllGather(this->Piece, sent);
-    received.resize(this->Received.size() * static_cast<std::size_t>(width));
-    for (std::size_t j = 0; j < this->Received.size(); ++j)
-    {
-      const double* from = all[this->From[j].first].data() + this->From[j].second * width;
-      std::copy(from, from + width, received.data() + j * width);
-    }
-  }
-  std::int64_t Unmatched = 0;
-
-private:
-  PieceHub& Hub;
-  int Piece;
-  const std::vector<std::int64_t>& GlobalIds;
-  const std::vector<std::uint8_t>& OwnPoints;
-  std::vector<std::int64_t> Sent, Received;
-  std::vector<std::pair<std::size_t, std::size_t>> From;
-};
-
 template <int D>
 struct MeshPiece
 {
@@ -919,7 +784,8 @@ std::int64_t CountPieceDifferences(const std::vector<double>& points,
       [&, piece]()
       {
         const MeshPiece<D>& part = parts[piece];
-        MemoryExchange memory(hub, piece, part.GlobalIds, part.OwnPoints);
+        MemoryExchange memory(hub, piece,
+          std::vector<double>(part.GlobalIds.begin(), part.GlobalIds.end()), 1, part.OwnPoints);
         stm::VertexSnapOptions pieceOptions = options;
         pieceOptions.Exchange = exchange ? &memory : nullptr;
         stm::SequentialExecutor pieceExecutor;
