@@ -289,12 +289,12 @@ stm::Status SplitEdges(SmoothRequest& request, const IdType* connectivity,
 template <int Dim, class IdType>
 std::vector<std::uint8_t> GhostCellPoints(vtkUnstructuredGrid* input, const IdType* connectivity)
 {
-  const unsigned char* ghosts = stmPieces::GhostCellFlags(input);
-  const vtkIdType cells = input->GetNumberOfCells();
-  if (!ghosts || std::none_of(ghosts, ghosts + cells, [](unsigned char g) { return g != 0; }))
+  if (!stmPieces::HasGhostCells(input))
   {
     return {};
   }
+  const unsigned char* ghosts = stmPieces::GhostCellFlags(input);
+  const vtkIdType cells = input->GetNumberOfCells();
   std::vector<std::uint8_t> held(static_cast<std::size_t>(input->GetNumberOfPoints()), 0);
   for (vtkIdType c = 0; c < cells; ++c)
   {

@@ -392,11 +392,7 @@ int stmMultiMaterialCut::RequestData(
   {
     return fail(problem);
   }
-  const unsigned char* ghosts = stmPieces::GhostCellFlags(input);
-  const vtkIdType numberOfCells = input->GetNumberOfCells();
-  agree(this->VertexSnapping && ghosts &&
-      std::any_of(ghosts, ghosts + numberOfCells, [](unsigned char g) { return g != 0; }),
-    dimension);
+  agree(this->VertexSnapping && stmPieces::HasGhostCells(input), dimension);
   if (exchanges)
   {
     order = CommonPeelingOrder(controller, order, this->BackgroundMaterial);
@@ -404,7 +400,7 @@ int stmMultiMaterialCut::RequestData(
   stm::MultiMaterialCutOptions options;
   options.ZeroTolerance = this->ZeroTolerance;
   options.SnapVertices = this->VertexSnapping;
-  options.GhostCells = exchanges ? ghosts : nullptr;
+  options.GhostCells = exchanges ? stmPieces::GhostCellFlags(input) : nullptr;
   options.Exchanges = exchanges.get();
   this->UpdateProgress(0.02);
 

@@ -33,6 +33,7 @@
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkUnsignedCharArray.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 
@@ -159,6 +160,14 @@ inline const unsigned char* GhostCellFlags(vtkDataSet* data)
                           data->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName()))
                       : nullptr;
   return ghosts ? ghosts->GetPointer(0) : nullptr;
+}
+
+/// Whether `data` is a piece with at least one ghost cell (the exchanging stages' condition).
+inline bool HasGhostCells(vtkDataSet* data)
+{
+  const unsigned char* ghosts = GhostCellFlags(data);
+  return ghosts &&
+    std::any_of(ghosts, ghosts + data->GetNumberOfCells(), [](unsigned char g) { return g != 0; });
 }
 
 /// A new vtkGhostType array of `count` values, to be filled.

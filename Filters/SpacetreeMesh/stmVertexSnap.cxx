@@ -88,14 +88,11 @@ stm::Status Snap(SnapRequest& request, const IdType* connectivity, std::string& 
   if (request.Controller)
   {
     request.ExchangeAgreed = true;
-    const unsigned char* ghosts = stmPieces::GhostCellFlags(input);
-    const vtkIdType cells = input->GetNumberOfCells();
-    const bool can =
-      ghosts && std::any_of(ghosts, ghosts + cells, [](unsigned char g) { return g != 0; });
-    if (stmPieceExchange::AllAgree(request.Controller, can))
+    if (stmPieceExchange::AllAgree(request.Controller, stmPieces::HasGhostCells(input)))
     {
       exchange = std::make_unique<stmSnapExchange>(request.Controller, inputPoints,
-        stmSnapExchange::FindOwnPoints<Dim>(connectivity, cells, numberOfPoints, ghosts));
+        stmSnapExchange::FindOwnPoints<Dim>(connectivity, input->GetNumberOfCells(), numberOfPoints,
+          stmPieces::GhostCellFlags(input)));
       request.Options.Exchange = exchange.get();
     }
   }
