@@ -29,7 +29,6 @@
 #include <iostream>
 #include <numeric>
 #include <string>
-#include <unordered_map>
 
 namespace stmesh
 {
@@ -301,9 +300,9 @@ vtkSmartPointer<vtkPointSet> GatherOnFirstRank(vtkPointSet* mesh)
 
 vtkSmartPointer<vtkPointSet> WithGlobalIds(vtkPointSet* mesh, const ParallelRun& parallel)
 {
-  // Only the points on a piece's border can be shared. vtkGenerateGlobalIds matches them between
-  // the ranks (run on the whole mesh it takes longer than the meshing); the others are numbered
-  // in rank order.
+  // Only the points on a piece's border can be shared. vtkGenerateGlobalIds matches and numbers
+  // them between the ranks (run on the whole mesh it takes longer than the meshing); the others
+  // are numbered after them, in rank order.
   vtkUnsignedCharArray* border =
     vtkUnsignedCharArray::SafeDownCast(mesh->GetPointData()->GetArray(PieceBorderName));
   vtkNew<vtkIdTypeArray> meshPointOfBoundary;
@@ -324,10 +323,11 @@ vtkSmartPointer<vtkPointSet> WithGlobalIds(vtkPointSet* mesh, const ParallelRun&
   match->SetTolerance(0.0); // shared points are equal bit for bit
   vtkSmartPointer<vtkPointSet> matched =
     RunOn(match, boundaryPoints, "matching the points the pieces share");
-  vtkIdTypeArray* sharedKey = vtkIdTypeArray::SafeDownCast(matched->GetPointData()->GetGlobalIds());
+  vtkIdTypeArray* borderPointIds =
+    vtkIdTypeArray::SafeDownCast(matched->GetPointData()->GetGlobalIds());
   vtkUnsignedCharArray* boundaryGhosts = matched->GetPointData()->GetGhostArray();
   const vtkIdType numberOfBoundaryPoints = matched->GetNumberOfPoints();
-  if (numberOfBoundaryPoints > 0 && (!sharedKey || !boundaryGhosts))
+  if (numberOfBoundaryPoints > 0 && (!borderPointIds || !boundaryGhosts))
   {
     throw Failure("matching the points the pieces share: vtkGenerateGlobalIds gave no ids");
   }
@@ -344,51 +344,43 @@ vtkSmartPointer<vtkPointSet> WithGlobalIds(vtkPointSet* mesh, const ParallelRun&
       pointGhosts->SetValue(meshPointOfBoundary->GetValue(b), vtkDataSetAttributes::DUPLICATEPOINT);
     }
   }
+  // vtkGenerateGlobalIds numbered the border points 0 .. (their number - 1) over all ranks, a
+  // shared point with its owner's id on every rank that has it; the other points follow, in
+  // rank order. So no rank needs the others' ids (an all-gather of them grew with the ranks).
+  vtkIdType ownedBorderPoints = 0;
+  for (vtkIdType b = 0; b < numberOfBoundaryPoints; ++b)
+  {
+    ownedBorderPoints += (boundaryGhosts->GetValue(b) & vtkDataSetAttributes::DUPLICATEPOINT) == 0;
+  }
   vtkIdType ownedPoints = 0;
   for (vtkIdType p = 0; p < numberOfPoints; ++p)
   {
     ownedPoints += pointGhosts->GetValue(p) == 0;
   }
-  const long long pointOffset = parallel.ExclusiveSum(ownedPoints);
+  const long long numberOfBorderIds = parallel.Sum(ownedBorderPoints);
+  const long long pointOffset =
+    numberOfBorderIds + parallel.ExclusiveSum(ownedPoints - ownedBorderPoints);
   vtkNew<vtkIdTypeArray> globalPointIds;
   globalPointIds->SetName("GlobalPointIds");
   globalPointIds->SetNumberOfValues(numberOfPoints);
+  globalPointIds->FillValue(-1);
+  for (vtkIdType b = 0; b < numberOfBoundaryPoints; ++b)
+  {
+    const vtkIdType id = borderPointIds->GetValue(b);
+    if (id < 0 || id >= numberOfBorderIds)
+    {
+      throw Failure("numbering the points globally: vtkGenerateGlobalIds gave a border point the "
+                    "id " +
+        std::to_string(id) + ", not one of 0 to " + std::to_string(numberOfBorderIds - 1));
+    }
+    globalPointIds->SetValue(meshPointOfBoundary->GetValue(b), id);
+  }
   vtkIdType next = pointOffset;
   for (vtkIdType p = 0; p < numberOfPoints; ++p)
   {
-    globalPointIds->SetValue(p, pointGhosts->GetValue(p) == 0 ? next++ : -1);
-  }
-
-  // A shared point's id is its owner's: every rank tells the others (key, id) of the shared
-  // points it owns.
-  std::vector<long long> ownedKeysAndIds;
-  for (vtkIdType b = 0; b < numberOfBoundaryPoints; ++b)
-  {
-    const vtkIdType p = meshPointOfBoundary->GetValue(b);
-    if (pointGhosts->GetValue(p) == 0)
+    if (globalPointIds->GetValue(p) < 0)
     {
-      ownedKeysAndIds.push_back(sharedKey->GetValue(b));
-      ownedKeysAndIds.push_back(globalPointIds->GetValue(p));
-    }
-  }
-  const std::vector<long long> allKeysAndIds = parallel.AllGather(ownedKeysAndIds);
-  std::unordered_map<long long, long long> idOfKey;
-  idOfKey.reserve(allKeysAndIds.size() / 2);
-  for (std::size_t i = 0; i + 1 < allKeysAndIds.size(); i += 2)
-  {
-    idOfKey.emplace(allKeysAndIds[i], allKeysAndIds[i + 1]);
-  }
-  for (vtkIdType b = 0; b < numberOfBoundaryPoints; ++b)
-  {
-    const vtkIdType p = meshPointOfBoundary->GetValue(b);
-    if (pointGhosts->GetValue(p) != 0)
-    {
-      const auto owner = idOfKey.find(sharedKey->GetValue(b));
-      if (owner == idOfKey.end())
-      {
-        throw Failure("numbering the points globally: a shared point has no owner");
-      }
-      globalPointIds->SetValue(p, owner->second);
+      globalPointIds->SetValue(p, next++);
     }
   }
 

@@ -432,7 +432,8 @@ stm::Status Smooth(SmoothRequest& request, const IdType* connectivity)
       request.Options.HeldPoints = movers.Held.data();
       request.Options.GhostPoints = held.data();
       vtkDebugWithObjectMacro(request.Filter,
-        "exchanging " << exchange->GetNumberOfSentPoints() << " points; "
+        "exchanging " << exchange->GetNumberOfSentPoints() << " points with "
+                      << exchange->GetNumberOfPeers() << " pieces; "
                       << exchange->GetNumberOfUnmatchedPoints() << " held points unmatched");
       // Every point of a ghost cell lies in a cell of the piece that moves it, which sends it:
       // one without a match is a point the other pieces' meshes do not have.

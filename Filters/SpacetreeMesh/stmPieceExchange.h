@@ -15,14 +15,15 @@
  * A piece sends the points it moves that other pieces may have: the points of its cells that
  * have a point of a ghost cell. A point another piece has lies in a cell that piece has, an own
  * cell of either or a ghost cell of that piece's ring, and every such cell has a point of a
- * ghost cell here. The lists are made once; every exchange then sends values only, in the
- * lists' order (AllGatherV, so the cost grows with the ranks; the pieces that share no point
- * still take part).
+ * ghost cell here. The lists are made once; every exchange then sends values only, to the
+ * pieces that hold them (stmNeighbourExchange: neither the messages nor their number grow
+ * with the ranks).
  */
 
 #ifndef stmPieceExchange_h
 #define stmPieceExchange_h
 
+#include "stmNeighbourExchange.h"
 #include "stmPieceBorder.h"
 
 #include "Smooth/BoundarySmooth.h"
@@ -35,7 +36,6 @@
 #include <cstdint>
 #include <limits>
 #include <map>
-#include <unordered_map>
 #include <vector>
 
 namespace stmPieceExchange
@@ -140,10 +140,8 @@ public:
     const std::uint8_t* ghostPoints, const Movers& movers, KeyOf&& keyOf)
   {
     constexpr int Corners = Dim + 1;
-    const int ranks = this->Controller->GetNumberOfProcesses();
-    const int rank = this->Controller->GetLocalProcessId();
-    // The points this piece moves that other pieces may have, by colour, then id.
-    std::vector<std::uint8_t> sent(static_cast<std::size_t>(points), 0);
+    // The points this piece moves that other pieces may have.
+    std::vector<std::uint8_t> offered(static_cast<std::size_t>(points), 0);
     for (std::int64_t c = 0; c < cells; ++c)
     {
       bool touches = false;
@@ -154,89 +152,35 @@ public:
       for (int v = 0; v < Corners && touches; ++v)
       {
         const auto p = static_cast<std::size_t>(connectivity[c * Corners + v]);
-        sent[p] = !movers.Held[p];
+        offered[p] = !movers.Held[p];
       }
     }
-    this->SentOffsets.assign(static_cast<std::size_t>(this->NumberOfColours) + 1, 0);
+    std::vector<stmPieceBorder::Key> wantedKeys, offeredKeys;
+    std::vector<std::uint8_t> colours;
+    this->Wanted.clear();
+    this->Offered.clear();
     for (std::int64_t p = 0; p < points; ++p)
     {
-      if (sent[p])
-      {
-        ++this->SentOffsets[movers.Colours[p] + 1];
-      }
-    }
-    for (int colour = 0; colour < this->NumberOfColours; ++colour)
-    {
-      this->SentOffsets[colour + 1] += this->SentOffsets[colour];
-    }
-    this->Sent.resize(static_cast<std::size_t>(this->SentOffsets.back()));
-    std::vector<std::int64_t> next(this->SentOffsets.begin(), this->SentOffsets.end() - 1);
-    for (std::int64_t p = 0; p < points; ++p)
-    {
-      if (sent[p])
-      {
-        this->Sent[static_cast<std::size_t>(next[movers.Colours[p]]++)] = p;
-      }
-    }
-    // Every rank's colour offsets and keys.
-    std::vector<long long> offsets(this->SentOffsets.begin(), this->SentOffsets.end());
-    std::vector<long long> allOffsets(offsets.size() * static_cast<std::size_t>(ranks));
-    this->Controller->AllGather(
-      offsets.data(), allOffsets.data(), static_cast<vtkIdType>(offsets.size()));
-    this->RankOffsets.assign(static_cast<std::size_t>(ranks), {});
-    for (int r = 0; r < ranks; ++r)
-    {
-      this->RankOffsets[r].assign(
-        allOffsets.begin() + r * static_cast<std::ptrdiff_t>(offsets.size()),
-        allOffsets.begin() + (r + 1) * static_cast<std::ptrdiff_t>(offsets.size()));
-    }
-    std::vector<double> keys;
-    keys.reserve(this->Sent.size() * 3);
-    for (const std::int64_t p : this->Sent)
-    {
-      double key[3];
-      keyOf(p, key);
-      keys.insert(keys.end(), key, key + 3);
-    }
-    const std::vector<double> allKeys = stmPieceBorder::detail::AllGather(this->Controller, keys);
-    // The held points by key, matched with the senders' lists.
-    std::unordered_map<stmPieceBorder::Key, std::int64_t, stmPieceBorder::KeyHash> held;
-    for (std::int64_t p = 0; p < points; ++p)
-    {
-      if (movers.Held[p])
+      if (movers.Held[p] || offered[p])
       {
         stmPieceBorder::Key key;
         keyOf(p, key.data());
-        held.emplace(key, p);
-      }
-    }
-    this->Copies.assign(static_cast<std::size_t>(this->NumberOfColours), {});
-    std::vector<std::uint8_t> matched(static_cast<std::size_t>(points), 0);
-    std::size_t base = 0;
-    for (int r = 0; r < ranks; ++r)
-    {
-      const std::vector<long long>& rankOffsets = this->RankOffsets[r];
-      for (int colour = 0; colour < this->NumberOfColours && r != rank; ++colour)
-      {
-        for (long long i = rankOffsets[colour]; i < rankOffsets[colour + 1]; ++i)
+        if (movers.Held[p])
         {
-          const std::size_t at = base + 3 * static_cast<std::size_t>(i);
-          const auto found =
-            held.find(stmPieceBorder::Key{ allKeys[at], allKeys[at + 1], allKeys[at + 2] });
-          if (found != held.end())
-          {
-            this->Copies[colour].push_back({ found->second, r, i - rankOffsets[colour] });
-            matched[static_cast<std::size_t>(found->second)] = 1;
-          }
+          this->Wanted.push_back(p);
+          wantedKeys.push_back(key);
+        }
+        else
+        {
+          this->Offered.push_back(p);
+          offeredKeys.push_back(key);
+          colours.push_back(movers.Colours[p]);
         }
       }
-      base += 3 * static_cast<std::size_t>(rankOffsets.back());
     }
-    this->Unmatched = 0;
-    for (std::int64_t p = 0; p < points; ++p)
-    {
-      this->Unmatched += movers.Held[p] && !matched[p];
-    }
+    this->Lists.Build(wantedKeys, offeredKeys, colours, this->NumberOfColours);
+    const std::vector<int>& providers = this->Lists.GetProviders();
+    this->Unmatched = std::count(providers.begin(), providers.end(), -1);
   }
 
   bool AllReady(bool ready) override { return AllAgree(this->Controller, ready); }
@@ -252,71 +196,44 @@ public:
   {
     const int first = colour >= 0 ? colour : 0;
     const int last = colour >= 0 ? colour + 1 : this->NumberOfColours;
-    const int ranks = this->Controller->GetNumberOfProcesses();
-    std::vector<vtkIdType> counts(static_cast<std::size_t>(ranks)), offsets(counts.size(), 0);
-    for (int r = 0; r < ranks; ++r)
-    {
-      counts[r] =
-        static_cast<vtkIdType>((this->RankOffsets[r][last] - this->RankOffsets[r][first]) * width);
-      offsets[r] = r == 0 ? 0 : offsets[r - 1] + counts[r - 1];
-    }
-    if (offsets.back() + counts.back() == 0)
-    {
-      return; // every rank knows the counts: all skip
-    }
-    std::vector<double> send;
-    send.reserve(
-      static_cast<std::size_t>((this->SentOffsets[last] - this->SentOffsets[first]) * width));
-    for (std::int64_t i = this->SentOffsets[first]; i < this->SentOffsets[last]; ++i)
-    {
-      const std::int64_t p = this->Sent[static_cast<std::size_t>(i)];
-      send.insert(send.end(), values + p * width, values + (p + 1) * width);
-    }
-    std::vector<double> received(static_cast<std::size_t>(offsets.back() + counts.back()));
-    double nothing = 0.0;
-    this->Controller->AllGatherV(send.empty() ? &nothing : send.data(), received.data(),
-      static_cast<vtkIdType>(send.size()), counts.data(), offsets.data());
-    for (int c = first; c < last; ++c)
-    {
-      for (const Copy& copy : this->Copies[c])
+    this->Lists.Share(
+      width, first, last,
+      [&](std::int64_t offered, double* out)
       {
-        // Index within the sender's colour c, which starts after its colours first..c-1.
-        const long long index =
-          this->RankOffsets[copy.Rank][c] - this->RankOffsets[copy.Rank][first] + copy.Index;
-        const double* from = received.data() + offsets[copy.Rank] + index * width;
-        double* to = values + copy.Point * width;
-        if (!std::equal(from, from + width, to))
+        const std::int64_t p = this->Offered[static_cast<std::size_t>(offered)];
+        std::copy(values + p * width, values + (p + 1) * width, out);
+      },
+      [&](std::int64_t wanted, const double* in)
+      {
+        const std::int64_t p = this->Wanted[static_cast<std::size_t>(wanted)];
+        double* to = values + p * width;
+        if (!std::equal(in, in + width, to))
         {
-          std::copy(from, from + width, to);
+          std::copy(in, in + width, to);
           if (changed)
           {
-            changed->push_back(copy.Point);
+            changed->push_back(p);
           }
         }
-      }
-    }
+      });
   }
 
-  /// Sent points, and held points no piece sent (0 when the pieces' rings are complete).
+  /// Points this piece sends, the pieces it exchanges with, and held points no piece sends (0
+  /// when the pieces' rings are complete).
   std::int64_t GetNumberOfSentPoints() const
   {
-    return static_cast<std::int64_t>(this->Sent.size());
+    const std::vector<std::uint8_t>& taken = this->Lists.GetTaken();
+    return std::count(taken.begin(), taken.end(), 1);
   }
+  int GetNumberOfPeers() const { return this->Lists.GetNumberOfPeers(); }
   std::int64_t GetNumberOfUnmatchedPoints() const { return this->Unmatched; }
 
 private:
-  struct Copy
-  {
-    std::int64_t Point; // the held point here
-    int Rank;           // the piece that moves it
-    long long Index;    // its position in that piece's list of its colour
-  };
   vtkMultiProcessController* Controller;
   int NumberOfColours;
-  std::vector<std::int64_t> Sent;
-  std::vector<std::int64_t> SentOffsets;           // per colour, into Sent
-  std::vector<std::vector<long long>> RankOffsets; // every rank's SentOffsets
-  std::vector<std::vector<Copy>> Copies;           // per colour
+  stmNeighbourExchange::Lists Lists{ this->Controller };
+  std::vector<std::int64_t> Wanted;  // the held points
+  std::vector<std::int64_t> Offered; // the moved points other pieces may have
   std::int64_t Unmatched = 0;
 };
 } // namespace stmPieceExchange

@@ -6,16 +6,16 @@
  * A piece decides the points of its own cells as the whole mesh does, given the whole mesh's
  * states around them at the start of every round (stm::SnapExchange). A point that lies on
  * none of the piece's own cells is held: it lies on an own cell of another piece (the ghost
- * cell it lies on is some piece's own), which sends its state. Each piece gathers the names of
- * every piece's held points and sends the states of those that lie on its own cells; several
- * pieces may send one point (it lies on own cells of each), and they send the same state. A
- * point is named by its position before the snap, which the pieces compute bit for bit alike.
- * Every exchange is an AllGatherV of the sent states, so the cost grows with the ranks.
+ * cell it lies on is some piece's own), which sends its state. Several pieces may offer one
+ * point (it lies on own cells of each), with the same state; the holder takes it from one of
+ * them. A point is named by its position before the snap, which the pieces compute bit for bit
+ * alike. The states travel between neighbouring pieces only (stmNeighbourExchange).
  */
 
 #ifndef stmSnapExchange_h
 #define stmSnapExchange_h
 
+#include "stmNeighbourExchange.h"
 #include "stmPieceBorder.h"
 #include "stmPieceExchange.h"
 
@@ -28,8 +28,6 @@
 #include <algorithm>
 #include <cstdint>
 #include <memory>
-#include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
 class stmSnapExchange : public stm::SnapExchange
@@ -77,8 +75,11 @@ public:
   void List(const std::int64_t* points, std::int64_t count) override
   {
     using stmPieceBorder::Key;
-    auto keyOf = [this](std::int64_t p)
+    std::vector<Key> wantedKeys, offeredKeys;
+    std::vector<std::int64_t> wanted, offered; // indices into `points`
+    for (std::int64_t i = 0; i < count; ++i)
     {
+      const std::int64_t p = points[i];
       Key key;
       if (this->Keys)
       {
@@ -89,105 +90,65 @@ public:
         std::copy(
           this->KeyCoordinates.data() + 3 * p, this->KeyCoordinates.data() + 3 * p + 3, key.data());
       }
-      return key;
-    };
-    // Every piece's held points, by name.
-    std::vector<double> heldKeys;
-    std::vector<std::int64_t> held;
-    for (std::int64_t i = 0; i < count; ++i)
-    {
-      if (!this->OwnPoints[static_cast<std::size_t>(points[i])])
+      if (this->OwnPoints[static_cast<std::size_t>(p)])
       {
-        const Key key = keyOf(points[i]);
-        heldKeys.insert(heldKeys.end(), key.begin(), key.end());
-        held.push_back(i);
+        offered.push_back(i);
+        offeredKeys.push_back(key);
+      }
+      else
+      {
+        wanted.push_back(i);
+        wantedKeys.push_back(key);
       }
     }
-    const std::vector<double> allHeld =
-      stmPieceBorder::detail::AllGather(this->Controller, heldKeys);
-    std::unordered_set<Key, stmPieceBorder::KeyHash> wanted;
-    for (std::size_t at = 0; at + 3 <= allHeld.size(); at += 3)
-    {
-      wanted.insert(Key{ allHeld[at], allHeld[at + 1], allHeld[at + 2] });
-    }
-    // This piece's own points among them, and every piece's such points, by name.
+    this->Lists.Build(wantedKeys, offeredKeys, {}, 1);
+    // Sent and Received ascend, as the lists' indices do.
+    const std::vector<std::uint8_t>& taken = this->Lists.GetTaken();
     this->Sent.clear();
-    std::vector<double> sentKeys;
-    for (std::int64_t i = 0; i < count; ++i)
+    this->SentAt.assign(offered.size(), -1);
+    for (std::size_t o = 0; o < offered.size(); ++o)
     {
-      if (this->OwnPoints[static_cast<std::size_t>(points[i])])
+      if (taken[o])
       {
-        const Key key = keyOf(points[i]);
-        if (wanted.count(key))
-        {
-          this->Sent.push_back(i);
-          sentKeys.insert(sentKeys.end(), key.begin(), key.end());
-        }
+        this->SentAt[o] = static_cast<std::int64_t>(this->Sent.size());
+        this->Sent.push_back(offered[o]);
       }
     }
-    const int ranks = this->Controller->GetNumberOfProcesses();
-    const long long sentCount = static_cast<long long>(this->Sent.size());
-    std::vector<long long> sentCounts(static_cast<std::size_t>(ranks));
-    this->Controller->AllGather(&sentCount, sentCounts.data(), 1);
-    this->SentCounts.assign(sentCounts.begin(), sentCounts.end());
-    const std::vector<double> allSent =
-      stmPieceBorder::detail::AllGather(this->Controller, sentKeys);
-    std::unordered_map<Key, std::int64_t, stmPieceBorder::KeyHash> senders;
-    for (std::size_t at = 0; at + 3 <= allSent.size(); at += 3)
-    {
-      senders.emplace(
-        Key{ allSent[at], allSent[at + 1], allSent[at + 2] }, static_cast<std::int64_t>(at / 3));
-    }
+    const std::vector<int>& providers = this->Lists.GetProviders();
     this->Received.clear();
-    this->ReceivedFrom.clear();
-    this->Unmatched = 0;
-    for (std::size_t j = 0; j < held.size(); ++j)
+    this->ReceivedAt.assign(wanted.size(), -1);
+    for (std::size_t w = 0; w < wanted.size(); ++w)
     {
-      const auto found =
-        senders.find(Key{ heldKeys[3 * j], heldKeys[3 * j + 1], heldKeys[3 * j + 2] });
-      if (found == senders.end())
+      if (providers[w] >= 0)
       {
-        ++this->Unmatched;
-        continue;
+        this->ReceivedAt[w] = static_cast<std::int64_t>(this->Received.size());
+        this->Received.push_back(wanted[w]);
       }
-      this->Received.push_back(held[j]);
-      this->ReceivedFrom.push_back(found->second);
     }
+    this->Unmatched = std::count(providers.begin(), providers.end(), -1);
+    this->Idle = stmPieceExchange::AllAgree(this->Controller, this->Sent.empty());
   }
 
-  bool IsIdle() const override
-  {
-    return std::all_of(
-      this->SentCounts.begin(), this->SentCounts.end(), [](long long n) { return n == 0; });
-  }
+  bool IsIdle() const override { return this->Idle; }
 
   const std::vector<std::int64_t>& GetSent() const override { return this->Sent; }
   const std::vector<std::int64_t>& GetReceived() const override { return this->Received; }
 
   void Share(const std::vector<double>& sent, int width, std::vector<double>& received) override
   {
-    const int ranks = this->Controller->GetNumberOfProcesses();
-    std::vector<vtkIdType> counts(static_cast<std::size_t>(ranks)), offsets(counts.size(), 0);
-    for (int r = 0; r < ranks; ++r)
-    {
-      counts[r] = static_cast<vtkIdType>(this->SentCounts[r] * width);
-      offsets[r] = r == 0 ? 0 : offsets[r - 1] + counts[r - 1];
-    }
     received.resize(this->Received.size() * static_cast<std::size_t>(width));
-    const vtkIdType total = offsets.back() + counts.back();
-    if (total == 0)
-    {
-      return; // every rank knows the counts: all skip
-    }
-    this->All.resize(static_cast<std::size_t>(total));
-    double nothing = 0.0;
-    this->Controller->AllGatherV(sent.empty() ? &nothing : sent.data(), this->All.data(),
-      static_cast<vtkIdType>(sent.size()), counts.data(), offsets.data());
-    for (std::size_t j = 0; j < this->Received.size(); ++j)
-    {
-      const double* from = this->All.data() + this->ReceivedFrom[j] * width;
-      std::copy(from, from + width, received.data() + j * width);
-    }
+    this->Lists.Share(
+      width, 0, 1,
+      [&](std::int64_t offered, double* out)
+      {
+        const double* from = sent.data() + this->SentAt[static_cast<std::size_t>(offered)] * width;
+        std::copy(from, from + width, out);
+      },
+      [&](std::int64_t wanted, const double* in)
+      {
+        std::copy(in, in + width,
+          received.data() + this->ReceivedAt[static_cast<std::size_t>(wanted)] * width);
+      });
   }
 
   /// Held points that no piece sends: 0 when the pieces' meshes agree where they meet.
@@ -198,11 +159,11 @@ private:
   vtkPoints* Keys = nullptr;
   std::vector<double> KeyCoordinates; // without Keys
   std::vector<std::uint8_t> OwnPoints;
-  std::vector<std::int64_t> Sent;
-  std::vector<long long> SentCounts; // per rank
-  std::vector<std::int64_t> Received;
-  std::vector<std::int64_t> ReceivedFrom; // index among all ranks' sent points, in rank order
-  std::vector<double> All;
+  stmNeighbourExchange::Lists Lists{ this->Controller };
+  std::vector<std::int64_t> Sent, Received; // indices into the listed points
+  std::vector<std::int64_t> SentAt;         // per offered (own) listed point, into Sent, or -1
+  std::vector<std::int64_t> ReceivedAt;     // per wanted (held) listed point, into Received
+  bool Idle = true;
   std::int64_t Unmatched = 0;
 };
 
