@@ -36,6 +36,7 @@
 #include "../Common/Determinant.h"
 #include "../Common/ExactSum.h"
 #include "../Common/Execution.h"
+#include "../Common/GhostRings.h"
 #include "../Common/PointCells.h"
 #include "../Common/Status.h"
 #include "MarchingSimplices.h"
@@ -632,7 +633,8 @@ private:
   static constexpr int BorderRings = 4;
   /// Per material, 1 where it is carried by a point of a cell within BorderRings rings of the
   /// border between the piece's own cells and its ghost cells.
-  std::vector<std::uint8_t> BorderMaterials() const;
+  template <class Executor>
+  std::vector<std::uint8_t> BorderMaterials(Executor& executor) const;
   /// The status of a piece that another stopped, from the pieces' agreement (1: aborted,
   /// 2: failed).
   static Status StoppedByAnother(double stopped)
@@ -848,7 +850,7 @@ Status MultiMaterialCut<Dim>::RunSteps(std::int64_t numberOfPoints, const double
       this->StoppedTogether = true;
       return StoppedByAnother(stopped);
     }
-    this->ExchangedSteps = this->BorderMaterials();
+    this->ExchangedSteps = this->BorderMaterials(executor);
     this->Exchanges->AnyPiece(this->ExchangedSteps);
   }
   // Batches of steps with disjoint points (Batch) run side by side: a step with more than two
@@ -1336,7 +1338,8 @@ Status MultiMaterialCut<Dim>::SnapStep(
 }
 
 template <int Dim>
-std::vector<std::uint8_t> MultiMaterialCut<Dim>::BorderMaterials() const
+template <class Executor>
+std::vector<std::uint8_t> MultiMaterialCut<Dim>::BorderMaterials(Executor& executor) const
 {
   // A decision for an own point reads three rings of cells (VertexSnap), and a point whose
   // state changes is the end of a cut edge, so it or its neighbour carries the material. The
@@ -1345,41 +1348,25 @@ std::vector<std::uint8_t> MultiMaterialCut<Dim>::BorderMaterials() const
   // pieces, are the other pieces' on the own side.
   const auto numberOfCells = static_cast<std::int64_t>(this->CellParents.size());
   const std::int64_t numberOfPoints = this->GetNumberOfPoints();
-  std::vector<std::uint8_t> onOwn(static_cast<std::size_t>(numberOfPoints), 0),
-    reached(onOwn.size(), 0);
+  std::vector<std::uint8_t> own(static_cast<std::size_t>(numberOfCells));
   for (std::int64_t c = 0; c < numberOfCells; ++c)
   {
-    for (int v = 0; v <= Dim && !this->GhostCells[c]; ++v)
-    {
-      onOwn[this->Cells[c * (Dim + 1) + v]] = 1;
-    }
+    own[c] = this->GhostCells[c] ? 0 : 1;
   }
+  // The ghost cells by their rings from the own cells, and the own cells by theirs from the
+  // ghost cells.
+  const std::vector<std::uint8_t> ghostSide = GhostRings(this->Cells.data(), Dim + 1, numberOfCells,
+    numberOfPoints, this->GhostCells, BorderRings, executor);
+  const std::vector<std::uint8_t> ownSide = GhostRings(
+    this->Cells.data(), Dim + 1, numberOfCells, numberOfPoints, own.data(), BorderRings, executor);
+  std::vector<std::uint8_t> reached(static_cast<std::size_t>(numberOfPoints), 0);
   for (std::int64_t c = 0; c < numberOfCells; ++c)
   {
-    for (int v = 0; v <= Dim && this->GhostCells[c]; ++v)
+    const std::uint8_t ring = this->GhostCells[c] ? ghostSide[c] : ownSide[c];
+    for (int v = 0; v <= Dim && ring >= 1 && ring <= BorderRings; ++v)
     {
-      const std::int64_t p = this->Cells[c * (Dim + 1) + v];
-      reached[p] = onOwn[p];
+      reached[this->Cells[c * (Dim + 1) + v]] = 1;
     }
-  }
-  std::vector<std::uint8_t> next;
-  for (int ring = 0; ring < BorderRings; ++ring)
-  {
-    next = reached;
-    for (std::int64_t c = 0; c < numberOfCells; ++c)
-    {
-      const std::int64_t* ids = this->Cells.data() + c * (Dim + 1);
-      bool touches = false;
-      for (int v = 0; v <= Dim; ++v)
-      {
-        touches = touches || reached[ids[v]] != 0;
-      }
-      for (int v = 0; v <= Dim && touches; ++v)
-      {
-        next[ids[v]] = 1;
-      }
-    }
-    reached.swap(next);
   }
   std::vector<std::uint8_t> materials(static_cast<std::size_t>(this->NumberOfMaterials), 0);
   for (std::int64_t p = 0; p < numberOfPoints; ++p)

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Pieces of a distributed mesh run side by side on threads in the core tests: a hub where their
 // collective calls meet, and a stm::SnapExchange held in memory, the test double of the MPI one
-// (stmSnapExchange), naming points by a few doubles each (an id in the whole mesh, or a place).
+// (stmSnapExchange), naming points by a few doubles each (an id in the whole mesh, or a place),
+// and the slabs with rings of ghost cells that the pieces cut out of a whole mesh.
 
 #ifndef stmtestMemoryPieces_h
 #define stmtestMemoryPieces_h
@@ -235,6 +236,53 @@ private:
   std::unique_ptr<MemoryExchange> Step;
   std::int64_t Unmatched = 0;
 };
+
+/// The cells of piece `piece` of `pieces` slabs along x of a whole mesh (D + 1 point ids per
+/// cell): `own` is 1 for the cells whose centres lie in the slab, `kept` for those and `rings`
+/// rings of ghost cells around them (a cell that shares a point with the previous ring).
+template <int D>
+void CutOutSlab(const std::vector<double>& points, const std::vector<std::int64_t>& cells,
+  int piece, int pieces, int rings, std::vector<std::uint8_t>& own, std::vector<std::uint8_t>& kept)
+{
+  const std::size_t cellCount = cells.size() / (D + 1);
+  const std::size_t pointCount = points.size() / D;
+  double low = points[0], high = points[0];
+  for (std::size_t p = 0; p < pointCount; ++p)
+  {
+    low = std::min(low, points[p * D]);
+    high = std::max(high, points[p * D]);
+  }
+  own.assign(cellCount, 0);
+  for (std::size_t c = 0; c < cellCount; ++c)
+  {
+    double centre = 0.0;
+    for (int k = 0; k <= D; ++k)
+    {
+      centre += points[cells[c * (D + 1) + k] * D] / (D + 1);
+    }
+    const int slab = std::min(pieces - 1, static_cast<int>((centre - low) / (high - low) * pieces));
+    own[c] = slab == piece ? 1 : 0;
+  }
+  kept = own;
+  for (int ring = 0; ring < rings; ++ring)
+  {
+    std::vector<std::uint8_t> reached(pointCount, 0);
+    for (std::size_t c = 0; c < cellCount; ++c)
+    {
+      for (int k = 0; k <= D && kept[c]; ++k)
+      {
+        reached[cells[c * (D + 1) + k]] = 1;
+      }
+    }
+    for (std::size_t c = 0; c < cellCount; ++c)
+    {
+      for (int k = 0; k <= D && !kept[c]; ++k)
+      {
+        kept[c] = reached[cells[c * (D + 1) + k]];
+      }
+    }
+  }
+}
 
 } // namespace stmtest
 

@@ -619,12 +619,6 @@ std::int64_t CountPieceCutDifferences(const LabelledMesh<D>& labelled, int piece
   std::vector<std::vector<double>> expected =
     CutCellKeys<D>(whole, labelled.Labels, std::vector<std::uint8_t>(cellCount, 0));
 
-  double low = points[0], high = points[0];
-  for (std::size_t p = 0; p < points.size(); p += D)
-  {
-    low = std::min(low, points[p]);
-    high = std::max(high, points[p]);
-  }
   PieceHub hub(pieces);
   std::vector<std::vector<std::vector<double>>> found(static_cast<std::size_t>(pieces));
   std::vector<std::int64_t> unmatchedPerPiece(found.size(), 0), exchangedPerPiece(found.size(), 0);
@@ -634,39 +628,9 @@ std::int64_t CountPieceCutDifferences(const LabelledMesh<D>& labelled, int piece
     threads.emplace_back(
       [&, piece]()
       {
-        std::vector<std::uint8_t> own(static_cast<std::size_t>(cellCount), 0), kept;
-        for (std::int64_t c = 0; c < cellCount; ++c)
-        {
-          double centre = 0.0;
-          for (int v = 0; v <= D; ++v)
-          {
-            centre += points[cells[c * (D + 1) + v] * D] / (D + 1);
-          }
-          own[c] =
-            std::min(pieces - 1, static_cast<int>((centre - low) / (high - low) * pieces)) == piece
-            ? 1
-            : 0;
-        }
-        kept = own;
+        std::vector<std::uint8_t> own, kept;
+        CutOutSlab<D>(points, cells, piece, pieces, rings, own, kept);
         const std::size_t pointCount = points.size() / D;
-        for (int ring = 0; ring < rings; ++ring)
-        {
-          std::vector<std::uint8_t> reached(pointCount, 0);
-          for (std::int64_t c = 0; c < cellCount; ++c)
-          {
-            for (int v = 0; v <= D && kept[c]; ++v)
-            {
-              reached[cells[c * (D + 1) + v]] = 1;
-            }
-          }
-          for (std::int64_t c = 0; c < cellCount; ++c)
-          {
-            for (int v = 0; v <= D && !kept[c]; ++v)
-            {
-              kept[c] = reached[cells[c * (D + 1) + v]];
-            }
-          }
-        }
         std::vector<std::int64_t> local(pointCount, -1);
         for (std::int64_t c = 0; c < cellCount; ++c)
         {

@@ -691,41 +691,8 @@ MeshPiece<D> CutOutPiece(const std::vector<double>& points, const std::vector<do
   const std::vector<std::int64_t>& cells, int piece, int pieces, int rings)
 {
   const std::size_t cellCount = cells.size() / (D + 1);
-  double low = points[0], high = points[0];
-  for (std::size_t p = 0; p < values.size(); ++p)
-  {
-    low = std::min(low, points[p * D]);
-    high = std::max(high, points[p * D]);
-  }
-  std::vector<std::uint8_t> own(cellCount, 0), kept(cellCount, 0);
-  for (std::size_t c = 0; c < cellCount; ++c)
-  {
-    double centre = 0.0;
-    for (int k = 0; k <= D; ++k)
-    {
-      centre += points[cells[c * (D + 1) + k] * D] / (D + 1);
-    }
-    const int slab = std::min(pieces - 1, static_cast<int>((centre - low) / (high - low) * pieces));
-    own[c] = kept[c] = slab == piece ? 1 : 0;
-  }
-  for (int ring = 0; ring < rings; ++ring)
-  {
-    std::vector<std::uint8_t> reached(values.size(), 0);
-    for (std::size_t c = 0; c < cellCount; ++c)
-    {
-      for (int k = 0; k <= D && kept[c]; ++k)
-      {
-        reached[cells[c * (D + 1) + k]] = 1;
-      }
-    }
-    for (std::size_t c = 0; c < cellCount; ++c)
-    {
-      for (int k = 0; k <= D && !kept[c]; ++k)
-      {
-        kept[c] = reached[cells[c * (D + 1) + k]];
-      }
-    }
-  }
+  std::vector<std::uint8_t> own, kept;
+  CutOutSlab<D>(points, cells, piece, pieces, rings, own, kept);
   MeshPiece<D> result;
   std::vector<std::int64_t> local(values.size(), -1);
   std::vector<std::uint8_t> ownPoint(values.size(), 0);
