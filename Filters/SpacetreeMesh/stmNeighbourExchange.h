@@ -381,7 +381,6 @@ public:
   const std::vector<std::uint8_t>& GetTaken() const { return this->Taken; }
   /// The pieces this one sends values to or receives values from.
   int GetNumberOfPeers() const { return static_cast<int>(this->Peers.size()); }
-  int GetNumberOfGroups() const { return this->NumberOfGroups; }
 
 private:
   static constexpr int Tag = 73100; // and the next six

@@ -151,80 +151,48 @@ two_d = ((xx - 30.5) ** 2 / 26.0 ** 2 + (yy - 36.0) ** 2 / 30.0 ** 2 < 1.0).asty
 two_d[(xx - 30.5) ** 2 + (yy - 30.0) ** 2 < 12.0 ** 2] = 2
 check(two_d[np.newaxis], 3, "surface", "2D to MarchingSimplices, smoothed")
 
-# An abort on one rank during the exchanged steps: every rank stops at the same check (the
-# smoothing agrees on each abort check while it exchanges), none waits for the others, and
-# every rank's output is empty. Before, rank 1 left the exchanges and the others waited.
+
+def abort_on_rank_1(stages, aborted, at, what):
+    """Aborts the stage `aborted` of `stages` on rank 1 at progress `at`: every rank stops at the
+    same agreement, none waits for the others or reports an error, and every rank's output of
+    that stage is empty."""
+    stopped = []
+
+    def abort(caller, event):
+        if rank == 1 and caller.GetProgress() >= at and not stopped:
+            stopped.append(caller.GetProgress())
+            caller.SetAbortExecute(1)
+
+    aborted.AddObserver("ProgressEvent", abort)
+    errors = [T.ErrorCollector(stage) for stage in stages[1:]]
+    T.check(stages[-1].UpdatePiece(rank, ranks, 0) == 1, "%s abort: rank %d failed" % (what, rank))
+    T.check(not any(e.errors for e in errors), "%s abort at %g: rank %d: %r" % (
+        what, at, rank, [e.errors for e in errors]))
+    T.check(rank != 1 or stopped, "%s abort: rank 1 never reached %g of it" % (what, at))
+    T.check(aborted.GetOutput().GetNumberOfCells() == 0, "%s abort at %g: rank %d kept %d cells" % (
+        what, at, rank, aborted.GetOutput().GetNumberOfCells()))
+    controller.Barrier()
+    if rank == 0:
+        print("abort on rank 1 at %g of the exchanged %s: every rank stopped" % (at, what))
+
+
+def stage_of(stages, class_name):
+    return [stage for stage in stages if stage.IsA(class_name)][0]
+
+
+# An abort on one rank during the exchanged smoothing (halfway): the smoothing agrees on each
+# abort check while it exchanges. Before, rank 1 left the exchanges and the others waited.
 stages = chain(T.make_image(three_d), "materials")
-smooth = stages[-1]
-stopped = []
+abort_on_rank_1(stages, stages[-1], 0.5, "smoothing")
 
-
-def abort_halfway(caller, event):
-    if rank == 1 and caller.GetProgress() >= 0.5 and not stopped:
-        stopped.append(caller.GetProgress())
-        caller.SetAbortExecute(1)
-
-
-smooth.AddObserver("ProgressEvent", abort_halfway)
-errors = [T.ErrorCollector(stage) for stage in stages[1:]]
-T.check(smooth.UpdatePiece(rank, ranks, 0) == 1, "abort: rank %d failed" % rank)
-T.check(not any(e.errors for e in errors), "abort: rank %d: %r" % (
-    rank, [e.errors for e in errors]))
-T.check(rank != 1 or stopped, "abort: rank 1 never reached half of the smoothing")
-T.check(smooth.GetOutput().GetNumberOfCells() == 0,
-        "abort: rank %d kept %d cells" % (rank, smooth.GetOutput().GetNumberOfCells()))
-controller.Barrier()
-if rank == 0:
-    print("abort on rank 1 during the exchanged smoothing: every rank stopped")
-
-# An abort on rank 1 in the snap, before its rounds (progress 0.5) and during them: every rank
-# stops at the same agreement (the pieces agree before every round while they exchange), none
-# waits for the others, and no rank reports an error.
+# In the snap, before its rounds (progress 0.5) and during them: the pieces agree before every
+# round while they exchange.
 for at in (0.5, 0.7):
     stages = chain(T.make_image(ball), "function")
-    snap = [stage for stage in stages if stage.IsA("stmVertexSnap")][0]
-    stopped = []
+    abort_on_rank_1(stages, stage_of(stages, "stmVertexSnap"), at, "snap")
 
-    def abort_snap(caller, event):
-        if rank == 1 and caller.GetProgress() >= at and not stopped:
-            stopped.append(caller.GetProgress())
-            caller.SetAbortExecute(1)
-
-    snap.AddObserver("ProgressEvent", abort_snap)
-    errors = [T.ErrorCollector(stage) for stage in stages[1:]]
-    T.check(stages[-1].UpdatePiece(rank, ranks, 0) == 1, "snap abort: rank %d failed" % rank)
-    T.check(not any(e.errors for e in errors), "snap abort at %g: rank %d: %r" % (
-        at, rank, [e.errors for e in errors]))
-    T.check(rank != 1 or stopped, "snap abort: rank 1 never reached %g of the snap" % at)
-    T.check(snap.GetOutput().GetNumberOfCells() == 0,
-            "snap abort at %g: rank %d kept %d cells" % (at, rank,
-                                                         snap.GetOutput().GetNumberOfCells()))
-    controller.Barrier()
-    if rank == 0:
-        print("abort on rank 1 at %g of the exchanged snap: every rank stopped" % at)
-
-# An abort on rank 1 in MultiMaterialCut, before its steps (progress 0.1, where no snap has
-# begun) and during them (0.5): every rank stops at the next agreement of the steps' snaps (or
-# at the cut's last one), none waits for the others, and no rank reports an error.
+# In MultiMaterialCut, before its steps (progress 0.1, where no snap has begun) and during them
+# (0.5): every rank stops at the next agreement of the steps' snaps, or at the cut's last one.
 for at in (0.1, 0.5):
     stages = chain(T.make_image(noisy), "materials")
-    cut = [stage for stage in stages if stage.IsA("stmMultiMaterialCut")][0]
-    stopped = []
-
-    def abort_cut(caller, event):
-        if rank == 1 and caller.GetProgress() >= at and not stopped:
-            stopped.append(caller.GetProgress())
-            caller.SetAbortExecute(1)
-
-    cut.AddObserver("ProgressEvent", abort_cut)
-    errors = [T.ErrorCollector(stage) for stage in stages[1:]]
-    T.check(stages[-1].UpdatePiece(rank, ranks, 0) == 1, "cut abort: rank %d failed" % rank)
-    T.check(not any(e.errors for e in errors), "cut abort at %g: rank %d: %r" % (
-        at, rank, [e.errors for e in errors]))
-    T.check(rank != 1 or stopped, "cut abort: rank 1 never reached %g of the cut" % at)
-    T.check(cut.GetOutput().GetNumberOfCells() == 0,
-            "cut abort at %g: rank %d kept %d cells" % (at, rank,
-                                                        cut.GetOutput().GetNumberOfCells()))
-    controller.Barrier()
-    if rank == 0:
-        print("abort on rank 1 at %g of the exchanged multi-material cut: every rank stopped" % at)
+    abort_on_rank_1(stages, stage_of(stages, "stmMultiMaterialCut"), at, "multi-material cut")
