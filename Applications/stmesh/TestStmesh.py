@@ -228,7 +228,8 @@ def case_help_and_version(c):
                    "--smooth-method taubin|laplacian",
                    "--stop-after spacetree|balance|tessellate|snap|cut|smooth",
                    "--labels 1,2,5|all", "--merge S1,S2,...:T", "--merge 1,2,3:10 --merge 5,6:11",
-                   "--min-component-voxels N", "--interfaces FILE"]:
+                   "--min-component-voxels N", "--interfaces FILE",
+                   "--keep-memory auto|yes|no"]:
         check(option in out, "help does not mention %s" % option)
     out, _ = c.run_ok(["-h"])
     check(out.startswith("Usage: stmesh"), "-h does not print the usage")
@@ -3640,6 +3641,68 @@ def case_degenerate_memory(c):
         compressed.write(bytes(head))
     code, _, err = c.run([c.path("lying.nii.gz"), "-o", c.path("lying.vtu")])
     check(code == 1 and "can hold even compressed" in err, "the .nii.gz was not refused: " + err)
+
+
+def available_memory_bytes():
+    with open("/proc/meminfo") as meminfo:
+        for line in meminfo:
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024
+    return 0
+
+
+def case_keep_memory(c):
+    # --keep-memory (docs/performance.md, "Memory kept in the process"): the choice the summary
+    # records, and the same mesh whichever allocator setting made it.
+    image = c.make_image("labels.nrrd")
+    runs = {}
+    for label, arguments, env in [
+            ("default", [], {}),
+            ("no", ["--keep-memory", "no"], {}),
+            ("yes_over_tunables", ["--keep-memory=yes"],
+             {"GLIBC_TUNABLES": "glibc.malloc.tcache_count=0"}),
+            ("auto_with_tunables", ["--keep-memory", "auto"],
+             {"GLIBC_TUNABLES": "glibc.malloc.tcache_count=0"})]:
+        output, summary_path = c.path(label + ".vtu"), c.path(label + ".json")
+        c.run_ok([image, "-o", output, "--summary", summary_path] + arguments, env_changes=env)
+        runs[label] = (load_summary(summary_path)["keep_memory"], c.read_back(output))
+    expected = {
+        "default": ("auto", True, "auto: "),
+        "no": ("no", False, "--keep-memory no"),
+        "yes_over_tunables": ("yes", True, "--keep-memory yes"),
+        "auto_with_tunables": ("auto", False, "auto: GLIBC_TUNABLES is set")}
+    for label, (option, kept, reason) in expected.items():
+        record = runs[label][0]
+        check(record["option"] == option and record["kept"] == kept and
+              record["reason"].startswith(reason), "%s: %s" % (label, record))
+        check(runs[label][1] == runs["default"][1], "%s: another mesh" % label)
+    check(" within a quarter of the available " in runs["default"][0]["reason"],
+          "default: %s" % runs["default"][0]["reason"])
+    # An image whose voxels times 400 bytes exceed a quarter of the available memory (a full
+    # block of one label, uncompressed, up to the spacetree) is not kept under auto.
+    sizes = (512, 512, 128)
+    voxels = sizes[0] * sizes[1] * sizes[2]
+    available = available_memory_bytes()
+    with open(c.decompressed_aal(), "rb") as complete:
+        head = bytearray(complete.read(352))
+    struct.pack_into("<8h", head, 40, 3, sizes[0], sizes[1], sizes[2], 1, 1, 1, 1)
+    path = c.path("block.nii")
+    with open(path, "wb") as image_file:
+        image_file.write(bytes(head))
+        image_file.write(b"\x01" * voxels)
+    summary_path = c.path("block.json")
+    c.run_ok([path, "-o", c.path("block.vtu"), "--stop-after", "spacetree", "--summary",
+              summary_path])
+    record = load_summary(summary_path)["keep_memory"]
+    if voxels * 400 > 1.25 * available / 4:
+        check(not record["kept"] and " above a quarter of the available " in record["reason"],
+              "block: %s" % record)
+    else:
+        print("block: %d MiB available, too close to the bound to check: %s" %
+              (available // 1048576, record))
+    # A value that is none of the three is a usage error.
+    c.run_failing([image, "-o", c.path("bad.vtu"), "--keep-memory", "maybe"], 2,
+                  "--keep-memory: 'maybe' is not one of auto, yes, no", output=c.path("bad.vtu"))
 
 
 def run_case(case, work, make_context, test_prefix="stmesh."):

@@ -42,6 +42,7 @@
 #include "stmXMLUnstructuredGridWriter.h"
 #include "stmeshErrors.h"
 #include "stmeshImageInput.h"
+#include "stmeshMemoryPolicy.h"
 #include "stmeshParallel.h"
 #include "stmeshText.h"
 
@@ -186,7 +187,7 @@ const char* const UsageText =
               [--smooth-iterations N] [--smooth-method taubin|laplacian]
               [--stop-after spacetree|balance|tessellate|snap|cut|smooth] [--threads N]
               [--summary FILE.json] [--compressor lz4|zlib|none] [--interfaces FILE.vtp]
-              [--mpi]
+              [--keep-memory auto|yes|no] [--mpi]
        mpiexec -n P stmesh [OPTIONS] INPUT -o OUTPUT.pvtu
        stmesh -h|--help
        stmesh --version
@@ -370,6 +371,13 @@ Arguments:
                         after the smoothing, on the smoothed mesh.
   --threads N           number of threads, 1 to 4096. Default: all cores, or VTK_SMP_MAX_THREADS.
                         The STDThread backend is used unless VTK_SMP_BACKEND_IN_USE is set.
+  --keep-memory K       keep the memory a stage frees in the process for the next stages
+                        instead of giving it back to the system (glibc: no separate mappings
+                        for large blocks, no trimming): fewer page faults, which cost about 10
+                        us each on virtual machines (the AAL runs a fifth faster there), for
+                        about an eighth more peak memory. auto (the default): yes unless
+                        GLIBC_TUNABLES is set or the image's voxels times 400 bytes exceed a
+                        quarter of the available memory; yes; no.
   --summary FILE.json   also write the per-stage figures (seconds, peak memory and minor page
                         faults; for tessellate also the inserted points, the cells per type,
                         the boundary layers and, for hybrid and leaves output, the volume
@@ -709,6 +717,8 @@ struct Options
   bool RefineThinParts = true; // --thin-parts refine
   bool ThinPartsGiven = false;
   bool Mpi = false; // --mpi: start MPI without a launcher that announces itself
+  // --keep-memory
+  stmesh::KeepMemoryOption KeepMemory = stmesh::KeepMemoryOption::Automatic;
 
   /// Whether the run reaches the snap stage (it may still skip it: --snap none), the cut stage
   /// and the smooth stage; whether the smooth stage does anything; whether the run writes the
@@ -1318,7 +1328,8 @@ Options ParseCommandLine(int argc, char* argv[])
       "--balance-label", "--balance-region", "--elements", "--templates", "--cell-template",
       "--boundary-layer", "--separating", "--output-mode", "--keep", "--iso", "--alpha", "--snap",
       "--smooth-iterations", "--smooth-method", "--merge", "--min-component-voxels", "--interfaces",
-      "--materials", "--thin-parts", "--msh-format", "--label-names", "--background", "--report" };
+      "--materials", "--thin-parts", "--msh-format", "--label-names", "--background", "--report",
+      "--keep-memory" };
     if (valueOptions.count(name) == 0)
     {
       throw UsageError("unknown option '" + name + "'");
@@ -1489,6 +1500,13 @@ Options ParseCommandLine(int argc, char* argv[])
         throw UsageError("--compressor: '" + value + "' is not one of lz4, zlib, none");
       }
       options.Compressor = value;
+    }
+    else if (name == "--keep-memory")
+    {
+      if (!stmesh::ParseKeepMemoryOption(value, options.KeepMemory))
+      {
+        throw UsageError("--keep-memory: '" + value + "' is not one of auto, yes, no");
+      }
     }
     else if (name == "--msh-format")
     {
@@ -3529,6 +3547,7 @@ struct RunSummary
   bool DefaultInput = false;
   ImageInfo Image;
   ThreadSetup Threads;
+  stmesh::MemoryPolicy Memory;
   std::vector<StageReport> Stages;
   long long MinorFaultsAtStart = -1; // when the run began, after the libraries were loaded
   double TotalSeconds = 0.0;
@@ -3605,6 +3624,10 @@ void WriteSummary(const std::string& path, const Options& options, const RunSumm
   // machines (docs/performance.md, "Page faults on this virtual machine").
   const char* mallocTunables = std::getenv("GLIBC_TUNABLES");
   json << "  \"malloc_tunables\": " << JsonString(mallocTunables ? mallocTunables : "") << ",\n";
+  json << "  \"keep_memory\": {\"option\": "
+       << JsonString(stmesh::KeepMemoryOptionName(options.KeepMemory))
+       << ", \"kept\": " << (summary.Memory.Keep ? "true" : "false")
+       << ", \"reason\": " << JsonString(summary.Memory.Reason) << "},\n";
   // The spacetree's levels: cell edges in voxels per level, root first, along the image axes the
   // spacetree spans; fractional below the voxel (voxel_subdivision lattice units per voxel).
   const LevelTable& levels = summary.Levels;
@@ -5315,6 +5338,14 @@ int Run(const Options& options, const ParallelRun& parallel)
   else
   {
     image = ReadMergedImage(input, options, summary.Image, readReport);
+  }
+  // Decided once the image's size is known; the image itself is already allocated.
+  {
+    const int* voxels = summary.Image.VoxelDimensions;
+    summary.Memory = stmesh::ChooseMemoryPolicy(options.KeepMemory,
+      static_cast<double>(voxels[0]) * voxels[1] * voxels[2], AvailableMemoryBytes(),
+      std::getenv("GLIBC_TUNABLES"));
+    stmesh::ApplyMemoryPolicy(summary.Memory);
   }
   // The structure report needs the (merged) labels after the meshing; a surface has none.
   ReportImage reportImage;
