@@ -2227,14 +2227,19 @@ Status BoundarySmoother<Dim>::Step(const PointBlocks& blocks, bool surface, doub
           }
           continue;
         }
+        // Each neighbour's coordinates read once (the sums add in the same order as per axis).
+        double sum[Dim] = {};
+        for (std::int64_t k = 0; k < count; ++k)
+        {
+          const double* neighbour = x + neighbours[k] * Dim;
+          for (int c = 0; c < Dim; ++c)
+          {
+            sum[c] += neighbour[c];
+          }
+        }
         for (int c = 0; c < Dim; ++c)
         {
-          double sum = 0.0;
-          for (std::int64_t k = 0; k < count; ++k)
-          {
-            sum += x[neighbours[k] * Dim + c];
-          }
-          target[c] = x[p * Dim + c] + this->Factor * (sum / count - x[p * Dim + c]);
+          target[c] = x[p * Dim + c] + this->Factor * (sum[c] / count - x[p * Dim + c]);
         }
       }
     }
